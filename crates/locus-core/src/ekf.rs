@@ -1,0 +1,376 @@
+//! The Extended Kalman Filter: predict, correct (batch and sequential), gating.
+//!
+//! [`Ekf`] is configuration only (covariance-update form, optional gate); it
+//! holds no estimate. Every operation takes a [`Belief`] by reference and
+//! returns a new one, so **on any error the caller's belief is unchanged**.
+//!
+//! Equations (spec section 1, all seeds):
+//!
+//! * predict: `X- = f(X+, u, 0)`, `P- = A P+ A^T + W Q W^T`;
+//! * correct: `S = H P- H^T + V R V^T`, `G = P- H^T S^-1`,
+//!   `X+ = X- + G (z - h(X-))`, and `P+` by the chosen [`CovarianceUpdate`].
+//!
+//! Neither operation allocates.
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::belief::all_finite;
+use crate::{Belief, ChiSquareGate, Error, Input, MeasurementModel, MotionModel, Scalar};
+
+/// How the corrected covariance `P+` is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum CovarianceUpdate {
+    /// Joseph form `(I - G H) P (I - G H)^T + G (V R V^T) G^T`: positive
+    /// semi-definite by construction and valid for any gain; the result is
+    /// symmetrised, `(P + P^T)/2`, to remove the rounding asymmetry of the
+    /// products. The default.
+    #[default]
+    Joseph,
+    /// The papers' plain form `P+ = P- - G H P-` (cheapest; can lose symmetry
+    /// and definiteness to rounding).
+    Plain,
+    /// The plain form followed by `(P + P^T) / 2`.
+    ForcedSymmetric,
+}
+
+/// Which components of a measurement are present: `mask[i] == false` marks
+/// component `i` as missing. A missing component is excluded exactly (as if
+/// the measurement had only the present components); its value in `z` is not
+/// read, so it may hold anything. Never mark a missing value by NaN: a NaN in a
+/// present component is an error.
+pub type Mask<const M: usize> = [bool; M];
+
+/// The result of a correction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Correction<T: Scalar, const N: usize, const M: usize> {
+    /// The posterior if the update was applied, the prior (unchanged) if the
+    /// gate rejected it.
+    pub belief: Belief<T, N>,
+    /// The innovation `z - h(X-)` (angles wrapped; zero in missing components).
+    pub innovation: SVector<T, M>,
+    /// The normalised innovation squared `nu^T S^-1 nu` (dimensionless).
+    pub nis: T,
+    /// Degrees of freedom of the NIS: the number of present components.
+    pub dof: usize,
+    /// Whether the update was applied (`false`: rejected by the gate).
+    pub applied: bool,
+}
+
+/// The filter's configuration. Holds no estimate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ekf<T: Scalar> {
+    /// The covariance update of the correction (Joseph by default).
+    pub update: CovarianceUpdate,
+    /// An optional chi-square gate on the NIS: a correction whose NIS exceeds
+    /// the gate's threshold for its degrees of freedom is not applied.
+    pub gate: Option<ChiSquareGate<T>>,
+}
+
+impl<T: Scalar> Default for Ekf<T> {
+    fn default() -> Self {
+        Self {
+            update: CovarianceUpdate::Joseph,
+            gate: None,
+        }
+    }
+}
+
+/// The linearisation of a measurement at the prior, with missing components
+/// neutralised: row of `H` zero, residual zero, noise row/column zero with a
+/// unit diagonal. This makes the batch and the sequential update ignore them
+/// exactly.
+struct Linearised<T: Scalar, const N: usize, const M: usize> {
+    nu: SVector<T, M>,
+    h: SMatrix<T, M, N>,
+    r: SMatrix<T, M, M>,
+    dof: usize,
+}
+
+impl<T: Scalar> Ekf<T> {
+    /// A filter with the given covariance update and no gate.
+    pub fn new(update: CovarianceUpdate) -> Self {
+        Self { update, gate: None }
+    }
+
+    /// The same filter with a chi-square gate.
+    pub fn with_gate(mut self, gate: ChiSquareGate<T>) -> Self {
+        self.gate = Some(gate);
+        self
+    }
+
+    /// Prediction step: `X- = f(X+, u, 0)`, `P- = A P+ A^T + W Q W^T`
+    /// (kept exactly symmetric).
+    ///
+    /// Errors: non-finite belief, input, noise or model output. On error the
+    /// caller's belief is untouched (it is only borrowed).
+    pub fn predict<Mo, const N: usize, const NQ: usize>(
+        &self,
+        belief: &Belief<T, N>,
+        model: &Mo,
+        u: &Mo::Input,
+    ) -> Result<Belief<T, N>, Error>
+    where
+        Mo: MotionModel<T, N, NQ>,
+    {
+        belief.validate()?;
+        if !model.input_is_finite(u) {
+            return Err(Error::NonFinite(Input::Control));
+        }
+        let q = model.noise_cov(u);
+        if !all_finite(q.as_slice()) {
+            return Err(Error::NonFinite(Input::ProcessNoise));
+        }
+        let x = model.f(&belief.x, u, &SVector::zeros());
+        let a = model.jacobian_state(&belief.x, u);
+        let w = model.jacobian_noise(&belief.x, u);
+        if !(all_finite(x.as_slice()) && all_finite(a.as_slice()) && all_finite(w.as_slice())) {
+            return Err(Error::NonFinite(Input::MotionModel));
+        }
+        let p = a * belief.p * a.transpose() + w * q * w.transpose();
+        let p = symmetrise(p);
+        if !all_finite(p.as_slice()) {
+            return Err(Error::NonFinite(Input::Covariance));
+        }
+        Ok(Belief { x, p })
+    }
+
+    /// Batch correction with every component present.
+    pub fn correct<Me, const N: usize, const M: usize>(
+        &self,
+        belief: &Belief<T, N>,
+        model: &Me,
+        z: &SVector<T, M>,
+    ) -> Result<Correction<T, N, M>, Error>
+    where
+        Me: MeasurementModel<T, N, M>,
+    {
+        self.correct_masked(belief, model, z, &[true; M])
+    }
+
+    /// Batch correction: `S = H P H^T + V R V^T`, `G = P H^T S^-1`,
+    /// `X+ = X- + G nu`, `P+` by [`Ekf::update`]. Components with
+    /// `mask[i] == false` are excluded exactly.
+    ///
+    /// Errors: non-finite belief, measurement or model output; no measurement
+    /// predicted at this state; `S` not positive definite; every component
+    /// missing. A gated-out measurement is not an error: the result has
+    /// `applied == false` and the prior belief.
+    pub fn correct_masked<Me, const N: usize, const M: usize>(
+        &self,
+        belief: &Belief<T, N>,
+        model: &Me,
+        z: &SVector<T, M>,
+        mask: &Mask<M>,
+    ) -> Result<Correction<T, N, M>, Error>
+    where
+        Me: MeasurementModel<T, N, M>,
+    {
+        let lin = linearise(belief, model, z, mask)?;
+        let p = &belief.p;
+        let pht = p * lin.h.transpose();
+        let s = lin.h * pht + lin.r;
+        let chol = s.cholesky().ok_or(Error::InnovationNotPositiveDefinite)?;
+        // G^T = S^-1 (P H^T)^T  (S symmetric).
+        let g = chol.solve(&pht.transpose()).transpose();
+        let nis = lin.nu.dot(&chol.solve(&lin.nu));
+        if !nis.is_finite() {
+            return Err(Error::InnovationNotPositiveDefinite);
+        }
+        if let Some(gate) = &self.gate {
+            if !gate.accepts(nis, lin.dof) {
+                return Ok(Correction {
+                    belief: *belief,
+                    innovation: lin.nu,
+                    nis,
+                    dof: lin.dof,
+                    applied: false,
+                });
+            }
+        }
+        let x = belief.x + g * lin.nu;
+        let p_post = match self.update {
+            CovarianceUpdate::Joseph => {
+                let ikh = SMatrix::<T, N, N>::identity() - g * lin.h;
+                symmetrise(ikh * p * ikh.transpose() + g * lin.r * g.transpose())
+            }
+            CovarianceUpdate::Plain => p - g * pht.transpose(),
+            CovarianceUpdate::ForcedSymmetric => symmetrise(p - g * pht.transpose()),
+        };
+        finish(x, p_post, lin.nu, nis, lin.dof)
+    }
+
+    /// Sequential scalar correction with every component present.
+    pub fn correct_sequential<Me, const N: usize, const M: usize>(
+        &self,
+        belief: &Belief<T, N>,
+        model: &Me,
+        z: &SVector<T, M>,
+    ) -> Result<Correction<T, N, M>, Error>
+    where
+        Me: MeasurementModel<T, N, M>,
+    {
+        self.correct_sequential_masked(belief, model, z, &[true; M])
+    }
+
+    /// Sequential scalar correction (spec section 1, "Sequential correction").
+    ///
+    /// `h` and `H` are evaluated once, at the prior. If the effective noise
+    /// `V R V^T` is not diagonal it is first decorrelated by its Cholesky
+    /// factor `L` (`nu' = L^-1 nu`, `H' = L^-1 H`, unit noise). The components
+    /// are then applied one at a time, each with one division and no matrix
+    /// inverse; component `i` sees the innovation `nu'_i - H'_i (x - x_prior)`
+    /// so that the result equals the batch update in exact arithmetic. The NIS
+    /// is the sum of the scalar normalised innovations, which equals the batch
+    /// `nu^T S^-1 nu`; the gate (if any) is applied to it, and a rejected
+    /// update returns the prior.
+    pub fn correct_sequential_masked<Me, const N: usize, const M: usize>(
+        &self,
+        belief: &Belief<T, N>,
+        model: &Me,
+        z: &SVector<T, M>,
+        mask: &Mask<M>,
+    ) -> Result<Correction<T, N, M>, Error>
+    where
+        Me: MeasurementModel<T, N, M>,
+    {
+        let lin = linearise(belief, model, z, mask)?;
+        let (nu_d, h_d, r_d) = if is_diagonal(&lin.r) {
+            (lin.nu, lin.h, lin.r.diagonal())
+        } else {
+            let chol = lin.r.cholesky().ok_or(Error::NoiseNotPositiveDefinite)?;
+            let l = chol.l();
+            let nu_d = l
+                .solve_lower_triangular(&lin.nu)
+                .ok_or(Error::NoiseNotPositiveDefinite)?;
+            let h_d = l
+                .solve_lower_triangular(&lin.h)
+                .ok_or(Error::NoiseNotPositiveDefinite)?;
+            (nu_d, h_d, SVector::<T, M>::repeat(T::one()))
+        };
+        let x0 = belief.x;
+        let mut x = belief.x;
+        let mut p = belief.p;
+        let mut nis = T::zero();
+        for i in 0..M {
+            if !mask[i] {
+                continue;
+            }
+            let hi = h_d.row(i);
+            let innovation = nu_d[i] - (hi * (x - x0))[0];
+            let a = p * hi.transpose(); // P h^T, N x 1
+            let s = (hi * a)[0] + r_d[i];
+            if !(s > T::zero() && s.is_finite()) {
+                return Err(Error::InnovationNotPositiveDefinite);
+            }
+            let k = a / s;
+            x += k * innovation;
+            nis += innovation * innovation / s;
+            p = match self.update {
+                CovarianceUpdate::Joseph => {
+                    let ikh = SMatrix::<T, N, N>::identity() - k * hi;
+                    symmetrise(ikh * p * ikh.transpose() + k * k.transpose() * r_d[i])
+                }
+                CovarianceUpdate::Plain => p - k * a.transpose(),
+                CovarianceUpdate::ForcedSymmetric => symmetrise(p - k * a.transpose()),
+            };
+        }
+        if let Some(gate) = &self.gate {
+            if !gate.accepts(nis, lin.dof) {
+                return Ok(Correction {
+                    belief: *belief,
+                    innovation: lin.nu,
+                    nis,
+                    dof: lin.dof,
+                    applied: false,
+                });
+            }
+        }
+        finish(x, p, lin.nu, nis, lin.dof)
+    }
+}
+
+/// Evaluates `h`, `H`, `V R V^T` and the residual at the prior, checks them,
+/// and neutralises missing components.
+fn linearise<T, Me, const N: usize, const M: usize>(
+    belief: &Belief<T, N>,
+    model: &Me,
+    z: &SVector<T, M>,
+    mask: &Mask<M>,
+) -> Result<Linearised<T, N, M>, Error>
+where
+    T: Scalar,
+    Me: MeasurementModel<T, N, M>,
+{
+    belief.validate()?;
+    let dof = mask.iter().filter(|present| **present).count();
+    if dof == 0 {
+        return Err(Error::NothingToCorrect);
+    }
+    if (0..M).any(|i| mask[i] && !z[i].is_finite()) {
+        return Err(Error::NonFinite(Input::Measurement));
+    }
+    let z_hat = model.h(&belief.x).ok_or(Error::NoMeasurement)?;
+    let mut h = model.jacobian(&belief.x);
+    if !(all_finite(z_hat.as_slice()) && all_finite(h.as_slice())) {
+        return Err(Error::NonFinite(Input::MeasurementModel));
+    }
+    let mut r = model.noise(&belief.x);
+    if !all_finite(r.as_slice()) {
+        return Err(Error::NonFinite(Input::MeasurementNoise));
+    }
+    // Missing components of z may hold anything (even NaN): replace them by the
+    // prediction before forming the residual, then neutralise them.
+    let mut z_used = *z;
+    for i in 0..M {
+        if !mask[i] {
+            z_used[i] = z_hat[i];
+        }
+    }
+    let mut nu = model.residual(&z_used, &z_hat);
+    if !all_finite(nu.as_slice()) {
+        return Err(Error::NonFinite(Input::MeasurementModel));
+    }
+    for i in 0..M {
+        if !mask[i] {
+            nu[i] = T::zero();
+            h.row_mut(i).fill(T::zero());
+            r.row_mut(i).fill(T::zero());
+            r.column_mut(i).fill(T::zero());
+            r[(i, i)] = T::one();
+        }
+    }
+    Ok(Linearised { nu, h, r, dof })
+}
+
+fn finish<T: Scalar, const N: usize, const M: usize>(
+    x: SVector<T, N>,
+    p: SMatrix<T, N, N>,
+    innovation: SVector<T, M>,
+    nis: T,
+    dof: usize,
+) -> Result<Correction<T, N, M>, Error> {
+    if !all_finite(x.as_slice()) {
+        return Err(Error::NonFinite(Input::State));
+    }
+    if !all_finite(p.as_slice()) {
+        return Err(Error::NonFinite(Input::Covariance));
+    }
+    Ok(Correction {
+        belief: Belief { x, p },
+        innovation,
+        nis,
+        dof,
+        applied: true,
+    })
+}
+
+/// `(P + P^T) / 2`.
+#[inline]
+pub fn symmetrise<T: Scalar, const N: usize>(p: SMatrix<T, N, N>) -> SMatrix<T, N, N> {
+    let half = crate::cast::<T>(0.5);
+    (p + p.transpose()) * half
+}
+
+fn is_diagonal<T: Scalar, const M: usize>(r: &SMatrix<T, M, M>) -> bool {
+    (0..M).all(|i| (0..M).all(|j| i == j || r[(i, j)] == T::zero()))
+}

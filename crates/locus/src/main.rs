@@ -1,0 +1,43 @@
+//! `locus`: EKF localisation for wheeled robots, from the command line.
+//!
+//! The binary is thin: argument parsing, printing and files. The maths lives in
+//! `locus-core` (the filter) and `locus-models` (the papers' models).
+
+mod demo;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Locus: where is my robot? Extended Kalman Filter localisation of wheeled
+/// robots from wheel odometry and range sensors.
+#[derive(Parser, Debug)]
+#[command(name = "locus", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run the paper-001 EKF along one wall of the square arena and compare it
+    /// with odometry alone (a small built-in example until the simulator lands).
+    Demo(demo::DemoArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Demo(args) => demo::run(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {err}");
+            for cause in err.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}

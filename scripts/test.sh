@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Runs every test of Locus, and first installs what the tests need when it is
+# missing: rustfmt/clippy, the thumbv7em-none-eabihf target (the core must
+# build for a Cortex-M4F), and the pinned Python packages of the filterpy
+# cross-check (scripts/requirements-crosscheck.txt).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n== %s\n' "$*"; }
+
+step "toolchain: rustfmt, clippy, thumbv7em-none-eabihf"
+installed_components=$(rustup component list --installed 2>/dev/null || true)
+for c in rustfmt clippy; do
+  grep -q "^$c" <<<"$installed_components" || rustup component add "$c"
+done
+rustup target list --installed | grep -qx thumbv7em-none-eabihf || rustup target add thumbv7em-none-eabihf
+
+step "python: filterpy cross-check requirements"
+PY=${LOCUS_PYTHON:-python3}
+if ! "$PY" - <<'PYEOF' 2>/dev/null
+import importlib.metadata as m, pathlib, sys
+want = [l.split("==") for l in pathlib.Path("scripts/requirements-crosscheck.txt").read_text().split() if "==" in l]
+sys.exit(0 if all(m.version(n) == v for n, v in want) else 1)
+PYEOF
+then
+  "$PY" -m pip install --quiet -r scripts/requirements-crosscheck.txt
+fi
+
+step "format"
+cargo fmt --all -- --check
+
+step "clippy (-D warnings)"
+cargo clippy --workspace --all-targets --locked -- -D warnings
+
+step "no_std build for thumbv7em-none-eabihf"
+cargo build --locked -p locus-core -p locus-models --no-default-features --target thumbv7em-none-eabihf
+
+step "tests (optimised test profile)"
+cargo test --workspace --locked
+
+step "benchmarks compile"
+cargo bench --workspace --locked --no-run
+
+echo
+echo "all tests passed"
