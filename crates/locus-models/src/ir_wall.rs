@@ -17,7 +17,7 @@
 //! ```
 //! where the wall is the line `x = w` (or `y = w`) and `side = +1` if the
 //! sensors look towards +x (+y), `-1` otherwise. For the paper's arena this is
-//! `z = [Lw - d_w; pi/2 + ObsAng]` for `wall_x+` ([fix]: the paper's
+//! `z = [Lw - d_w; pi/2 + ObsAng]` for `wall_x+` (\[fix\]: the paper's
 //! `pi/2 - ObsAng`; with s1 in front a rotation away from the wall makes
 //! ObsAng positive for every wall).
 //!
@@ -32,7 +32,7 @@
 //! V = [[sgn (a + b + g), sgn (a - b - g)], [k, -k]]     sgn = -side
 //! ```
 //! so `V R V^T` is full even for a diagonal `R`. The innovation is `z - h(X)`
-//! with the heading wrapped ([fix]: the paper writes `h - z`).
+//! with the heading wrapped (\[fix\]: the paper writes `h - z`).
 
 use locus_core::nalgebra::{Matrix2, SMatrix, SVector, Vector2};
 use locus_core::{MeasurementModel, Scalar, cast, wrap_angle};

@@ -2,8 +2,24 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
+pub mod camera;
 pub mod diff_drive;
 pub mod ir_wall;
+pub mod laser_wall;
+pub mod observer;
+pub mod range_bearing;
+pub mod skid_steer;
+pub mod tricycle;
+pub mod unicycle;
 
+pub use camera::{CameraMark, CameraMarks, CameraMarks4, EulerRotation, Intrinsics, RandomWalk6};
 pub use diff_drive::{DiffDrive, WheelTravel};
 pub use ir_wall::{AxisWall, IrPair, IrPairObservation, Side, WallAxis};
+pub use laser_wall::{BeamLimits, LaserMount, LaserRange, LaserWallPaper, Segment, WallLine};
+pub use observer::{ContinuousObserver, ObserverState};
+pub use range_bearing::RangeBearing;
+pub use skid_steer::{SkidSteer, TreadSpeeds};
+pub use tricycle::{
+    CountNoise, FrontReading, RearCounts, TricycleFront, TricycleRear, counts_per_rev,
+};
+pub use unicycle::{Unicycle, Velocities};

@@ -1,5 +1,5 @@
-//! Independent cross-check of the Locus EKF with the paper-001 models against
-//! filterpy (Python).
+//! Independent cross-check of the Locus EKF with the paper-001 and paper-000
+//! models against filterpy (Python).
 //!
 //! The test runs `scripts/filterpy_crosscheck.py` (python from the environment
 //! variable `LOCUS_PYTHON`, else `python3`; it needs numpy and filterpy:
@@ -31,13 +31,32 @@
 //! a Cholesky factor and symmetrises after predict), which is ~1e-15 relative,
 //! so 1e-9 leaves a wide margin while any modelling difference (a sign, a
 //! missing offset term, an unwrapped angle) shows up at 1e-4 or more.
+//!
+//! # Paper 000
+//! A second test (`--only 000`) does the same for the paper-000 models
+//! (MODELS.md section 2, implemented independently in the script): a seeded
+//! 1000-step run of a Table III-like path (straight, turn to +47.5 deg,
+//! straight, turn to 61.7 deg, straight, at 0.10 m/s and 0.3 rad/s, dT = 0.1 s,
+//! 1 s at rest at each Table III instant, then back to the start and again;
+//! slipping treads, noisy encoders, a laser range to the wall x + y = 1.17 m
+//! with a smaller noise at rest than in motion), filtered twice on the same
+//! inputs: `run3_000_paper.csv` corrects with the paper's `H` (`z = [u_i, v_i]`,
+//! `LaserWallPaper`), `run4_000_range.csv` with the exact range model
+//! (`z = [gamma]`, `LaserRange`). Locus replays `SkidSteer` predictions and the
+//! run's laser model and asserts, at every step, that it predicts a measurement
+//! exactly where the script did (`pred_valid`), the same predicted measurement
+//! `z_hat` (absolute 1e-9 m), and the posterior with the tolerances above.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
-use locus_core::nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
+use locus_core::nalgebra::{Matrix2, Matrix3, SVector, Vector2, Vector3};
 use locus_core::{Belief, Ekf, MeasurementModel, wrap_angle};
+use locus_models::laser_wall::{
+    BeamLimits, LaserMount, LaserRange, LaserWallPaper, Segment, WallLine,
+};
+use locus_models::skid_steer::{SkidSteer, TreadSpeeds};
 use locus_models::{AxisWall, DiffDrive, IrPair, IrPairObservation, WheelTravel};
 
 /// Absolute tolerance on the state (m, m, rad) and on z.
@@ -253,62 +272,67 @@ fn replay(name: &str, run: &Run) -> Stats {
             other => panic!("{here}: has_obs must be 0 or 1, got {other:?}"),
         }
 
-        // Compare with filterpy's posterior.
-        let x_ref = Vector3::new(row.f("x"), row.f("y"), row.f("theta"));
-        let dx = [
-            (belief.x[0] - x_ref[0]).abs(),
-            (belief.x[1] - x_ref[1]).abs(),
-            wrap_angle(belief.x[2] - x_ref[2]).abs(),
-        ];
-        let worst = dx[0].max(dx[1]).max(dx[2]);
-        st.state_abs = st.state_abs.max(worst);
-        assert!(
-            worst <= TOL_STATE,
-            "{here}: state differs by {dx:?} (tolerance {TOL_STATE}):\n  Locus    {:?}\n  filterpy {:?}",
-            belief.x.as_slice(),
-            x_ref.as_slice()
-        );
-        let mut p_ref = Matrix3::zeros();
-        for r in 0..3 {
-            for c in 0..3 {
-                p_ref[(r, c)] = row.f(&format!("P{r}{c}"));
-            }
-        }
-        for r in 0..3 {
-            for c in 0..3 {
-                let (a, b) = (belief.p[(r, c)], p_ref[(r, c)]);
-                let floor = (p_ref[(r, r)] * p_ref[(c, c)]).abs().sqrt();
-                let d = mixed_rel(a, b, floor);
-                st.cov_rel = st.cov_rel.max(d);
-                st.cov_abs = st.cov_abs.max((a - b).abs());
-                assert!(
-                    d <= TOL_COV,
-                    "{here}: P({r},{c}) differs: Locus {a:e}, filterpy {b:e}, |diff| / scale = {d:e} \
-                     (tolerance {TOL_COV:e})\n  Locus P {}\n  filterpy P {}",
-                    belief.p,
-                    p_ref
-                );
-            }
-        }
+        check_posterior(&here, &belief, &row, &mut st);
         st.steps += 1;
     }
     st
 }
 
-fn scratch_dir() -> PathBuf {
+/// Compares Locus's posterior with filterpy's (the row's x, y, theta, P..)
+/// with the tolerances of the module doc, and records the discrepancies.
+fn check_posterior(here: &str, belief: &Belief<f64, 3>, row: &Row<'_>, st: &mut Stats) {
+    let x_ref = Vector3::new(row.f("x"), row.f("y"), row.f("theta"));
+    let dx = [
+        (belief.x[0] - x_ref[0]).abs(),
+        (belief.x[1] - x_ref[1]).abs(),
+        wrap_angle(belief.x[2] - x_ref[2]).abs(),
+    ];
+    let worst = dx[0].max(dx[1]).max(dx[2]);
+    st.state_abs = st.state_abs.max(worst);
+    assert!(
+        worst <= TOL_STATE,
+        "{here}: state differs by {dx:?} (tolerance {TOL_STATE}):\n  Locus    {:?}\n  filterpy {:?}",
+        belief.x.as_slice(),
+        x_ref.as_slice()
+    );
+    let mut p_ref = Matrix3::zeros();
+    for r in 0..3 {
+        for c in 0..3 {
+            p_ref[(r, c)] = row.f(&format!("P{r}{c}"));
+        }
+    }
+    for r in 0..3 {
+        for c in 0..3 {
+            let (a, b) = (belief.p[(r, c)], p_ref[(r, c)]);
+            let floor = (p_ref[(r, r)] * p_ref[(c, c)]).abs().sqrt();
+            let d = mixed_rel(a, b, floor);
+            st.cov_rel = st.cov_rel.max(d);
+            st.cov_abs = st.cov_abs.max((a - b).abs());
+            assert!(
+                d <= TOL_COV,
+                "{here}: P({r},{c}) differs: Locus {a:e}, filterpy {b:e}, |diff| / scale = {d:e} \
+                 (tolerance {TOL_COV:e})\n  Locus P {}\n  filterpy P {}",
+                belief.p,
+                p_ref
+            );
+        }
+    }
+}
+
+fn scratch_dir(tag: &str) -> PathBuf {
     let nanos = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map(|d| d.as_nanos())
         .unwrap_or(0);
     std::env::temp_dir().join(format!(
-        "locus-filterpy-crosscheck-{}-{nanos}",
+        "locus-filterpy-crosscheck-{tag}-{}-{nanos}",
         std::process::id()
     ))
 }
 
-#[test]
-fn ekf_matches_filterpy_on_paper_001_runs() {
-    let t0 = Instant::now();
+/// Runs `scripts/filterpy_crosscheck.py --out DIR --only {only}` and returns
+/// DIR (the reference CSVs).
+fn run_script(only: &str) -> PathBuf {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scripts/filterpy_crosscheck.py");
     assert!(
         script.is_file(),
@@ -316,12 +340,14 @@ fn ekf_matches_filterpy_on_paper_001_runs() {
         script.display()
     );
     let python = std::env::var("LOCUS_PYTHON").unwrap_or_else(|_| "python3".to_owned());
-    let out_dir = scratch_dir();
+    let out_dir = scratch_dir(only);
 
     let output = Command::new(&python)
         .arg(&script)
         .arg("--out")
         .arg(&out_dir)
+        .arg("--only")
+        .arg(only)
         .output()
         .unwrap_or_else(|e| {
             panic!(
@@ -333,7 +359,7 @@ fn ekf_matches_filterpy_on_paper_001_runs() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(
         output.status.success(),
-        "the filterpy cross-check script failed ({}): {python} {} --out {}\n--- stdout\n{stdout}\n--- stderr\n{stderr}\n\
+        "the filterpy cross-check script failed ({}): {python} {} --out {} --only {only}\n--- stdout\n{stdout}\n--- stderr\n{stderr}\n\
          (needs numpy and filterpy: pip install -r scripts/requirements-crosscheck.txt; \
          or set LOCUS_PYTHON to the right interpreter)",
         output.status,
@@ -345,6 +371,13 @@ fn ekf_matches_filterpy_on_paper_001_runs() {
         "reference CSVs in {} (removed if the test passes)",
         out_dir.display()
     );
+    out_dir
+}
+
+#[test]
+fn ekf_matches_filterpy_on_paper_001_runs() {
+    let t0 = Instant::now();
+    let out_dir = run_script("001");
     let t_python = t0.elapsed();
 
     for name in RUNS {
@@ -369,6 +402,175 @@ fn ekf_matches_filterpy_on_paper_001_runs() {
     }
     println!(
         "filterpy cross-check: script {:.2} s, total {:.2} s",
+        t_python.as_secs_f64(),
+        t0.elapsed().as_secs_f64()
+    );
+    // Only clean up on success: on failure the CSVs stay for inspection.
+    let _ = std::fs::remove_dir_all(&out_dir);
+}
+
+// ---------------------------------------------------------------------------
+// Paper 000: skid-steer prediction, laser correction with the paper's H and
+// with the exact range model.
+// ---------------------------------------------------------------------------
+
+/// The runs of paper 000 the script writes, and the laser model of each.
+const RUNS_000: [(&str, Laser000); 2] = [
+    ("run3_000_paper.csv", Laser000::Paper),
+    ("run4_000_range.csv", Laser000::Range),
+];
+
+/// Which laser model a paper-000 run corrects with.
+#[derive(Debug, Clone, Copy)]
+enum Laser000 {
+    /// `LaserWallPaper`: z = [u_i, v_i], H with (l, m) held fixed.
+    Paper,
+    /// `LaserRange`: z = [gamma], exact H.
+    Range,
+}
+
+fn flag(row: &Row<'_>, name: &str, here: &str) -> bool {
+    match row.str(name) {
+        "0" => false,
+        "1" => true,
+        other => panic!("{here}: {name} must be 0 or 1, got {other:?}"),
+    }
+}
+
+/// One laser correction: checks that Locus predicts a measurement exactly
+/// where the script did (`pred_valid`) and the same prediction (`zhat*`),
+/// then applies the correction if the row has one (`has_obs`, `z*`).
+fn laser_step<Me, const M: usize>(
+    here: &str,
+    ekf: &Ekf<f64>,
+    belief: &Belief<f64, 3>,
+    model: &Me,
+    row: &Row<'_>,
+    st: &mut Stats,
+) -> Belief<f64, 3>
+where
+    Me: MeasurementModel<f64, 3, M>,
+{
+    let zhat = model.h(&belief.x);
+    let pred_valid = flag(row, "pred_valid", here);
+    assert_eq!(
+        zhat.is_some(),
+        pred_valid,
+        "{here}: Locus {} a measurement at the prior {:?}, the script {}",
+        if zhat.is_some() {
+            "predicts"
+        } else {
+            "predicts no"
+        },
+        belief.x.as_slice(),
+        if pred_valid { "does" } else { "does not" }
+    );
+    if let Some(zhat) = zhat {
+        for k in 0..M {
+            let d = (zhat[k] - row.f(&format!("zhat{k}"))).abs();
+            st.z_abs = st.z_abs.max(d);
+            assert!(
+                d <= TOL_STATE,
+                "{here}: predicted measurement differs: Locus {zhat:?}, script zhat{k} = {}",
+                row.str(&format!("zhat{k}"))
+            );
+        }
+    }
+    if !flag(row, "has_obs", here) {
+        return *belief;
+    }
+    let mut z = SVector::<f64, M>::zeros();
+    for k in 0..M {
+        z[k] = row.f(&format!("z{k}"));
+    }
+    let corr = ekf
+        .correct(belief, model, &z)
+        .unwrap_or_else(|e| panic!("{here}: Locus correct failed: {e:?}"));
+    assert!(
+        corr.applied,
+        "{here}: correction not applied (no gate is set)"
+    );
+    st.observations += 1;
+    corr.belief
+}
+
+fn replay_000(name: &str, run: &Run, variant: Laser000) -> Stats {
+    let ekf = Ekf::<f64>::default();
+    let mut belief = run.init;
+    let mut st = Stats::default();
+    for (i, cells) in run.rows.iter().enumerate() {
+        let row = Row {
+            run,
+            cells,
+            line: i + 3,
+        };
+        let here = format!("{name}, step {} (CSV line {})", row.str("step"), row.line);
+
+        // Predict: skid steer, Euler.
+        let motion = SkidSteer::new(row.f("D"), row.f("var_vl"), row.f("var_vr"));
+        let u = TreadSpeeds::new(row.f("v_l"), row.f("v_r"), row.f("dt"));
+        belief = ekf
+            .predict(&belief, &motion, &u)
+            .unwrap_or_else(|e| panic!("{here}: Locus predict failed: {e:?}"));
+
+        // Correct: the run's laser model.
+        let mount = LaserMount::new(row.f("x_si"), row.f("y_si"), row.f("beta"));
+        let limits = BeamLimits {
+            max_range: row.f("max_range"),
+            parallel_tol: row.f("parallel_tol"),
+        };
+        belief = match variant {
+            Laser000::Paper => {
+                let wall = WallLine::new([row.f("nx"), row.f("ny")], [row.f("p0x"), row.f("p0y")]);
+                let mut model = LaserWallPaper::new(mount, wall, row.f("R0"), row.f("R1"));
+                model.limits = limits;
+                laser_step(&here, &ekf, &belief, &model, &row, &mut st)
+            }
+            Laser000::Range => {
+                let map = [Segment::new(
+                    [row.f("ax"), row.f("ay")],
+                    [row.f("bx"), row.f("by")],
+                )];
+                let mut model = LaserRange::new(mount, &map, row.f("R0"));
+                model.limits = limits;
+                laser_step(&here, &ekf, &belief, &model, &row, &mut st)
+            }
+        };
+
+        check_posterior(&here, &belief, &row, &mut st);
+        st.steps += 1;
+    }
+    st
+}
+
+#[test]
+fn ekf_matches_filterpy_on_paper_000_runs() {
+    let t0 = Instant::now();
+    let out_dir = run_script("000");
+    let t_python = t0.elapsed();
+
+    for (name, variant) in RUNS_000 {
+        let path = out_dir.join(name);
+        let run = parse_run(&path);
+        assert!(
+            run.rows.len() >= 1000,
+            "{name}: expected at least 1000 steps, got {}",
+            run.rows.len()
+        );
+        let st = replay_000(name, &run, variant);
+        assert!(
+            st.observations > 0,
+            "{name}: no laser observation: the run does not exercise the correction"
+        );
+        println!(
+            "{name} ({variant:?} laser model): {} steps, {} corrections; max |state diff| = {:.3e} \
+             (m/rad), max P diff = {:.3e} relative (mixed scale) / {:.3e} absolute, \
+             max |z_hat diff| = {:.3e} m",
+            st.steps, st.observations, st.state_abs, st.cov_rel, st.cov_abs, st.z_abs
+        );
+    }
+    println!(
+        "filterpy cross-check (000): script {:.2} s, total {:.2} s",
         t_python.as_secs_f64(),
         t0.elapsed().as_secs_f64()
     );

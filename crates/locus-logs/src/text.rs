@@ -1,0 +1,181 @@
+//! Reading whitespace-separated text logs: plain or xz-compressed files,
+//! comment and blank lines skipped, fields parsed with errors that name file,
+//! line, column and field.
+
+use core::str::SplitWhitespace;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, FieldProblem, RecordProblem, Result};
+
+/// The magic bytes that start an xz stream.
+const XZ_MAGIC: [u8; 6] = [0xFD, b'7', b'z', b'X', b'Z', 0x00];
+
+/// `dir/name` if it exists, else `dir/name.xz` if that exists.
+pub(crate) fn resolve(dir: &Path, name: &str) -> Result<PathBuf> {
+    let plain = dir.join(name);
+    if plain.is_file() {
+        return Ok(plain);
+    }
+    let xz = dir.join(format!("{name}.xz"));
+    if xz.is_file() {
+        return Ok(xz);
+    }
+    Err(Error::NotFound { path: plain })
+}
+
+/// The text of a file, decompressed if it is an xz stream (by its `.xz`
+/// extension or its magic bytes).
+pub(crate) fn read_text(path: &Path) -> Result<String> {
+    let bytes = fs::read(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let is_xz = path.extension().is_some_and(|e| e == "xz") || bytes.starts_with(&XZ_MAGIC);
+    let bytes = if is_xz {
+        // Text logs compress about 30-60 fold; start with a generous buffer.
+        let mut out = Vec::with_capacity(bytes.len().saturating_mul(32));
+        lzma_rs::xz_decompress(&mut bytes.as_slice(), &mut out).map_err(|source| {
+            Error::Decompress {
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
+        out
+    } else {
+        bytes
+    };
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        Error::NotUtf8 {
+            path: path.to_path_buf(),
+            line: 1 + valid.iter().filter(|b| **b == b'\n').count(),
+        }
+    })
+}
+
+/// The data lines of a text: `(line number, fields)`, skipping blank lines
+/// and lines whose first non-blank character is `#`.
+pub(crate) fn records<'a>(text: &'a str, path: &'a Path) -> impl Iterator<Item = Fields<'a>> + 'a {
+    text.lines().enumerate().filter_map(move |(i, line)| {
+        let trimmed = line.trim_start();
+        if trimmed.is_empty() || trimmed.starts_with('#') {
+            None
+        } else {
+            Some(Fields {
+                path,
+                line: i + 1,
+                column: 0,
+                it: trimmed.split_whitespace(),
+            })
+        }
+    })
+}
+
+/// The fields of one data line, read left to right.
+pub(crate) struct Fields<'a> {
+    path: &'a Path,
+    /// Line number, 1-based.
+    pub(crate) line: usize,
+    column: usize,
+    it: SplitWhitespace<'a>,
+}
+
+impl<'a> Fields<'a> {
+    fn next_text(&mut self, field: &'static str) -> Result<&'a str> {
+        self.column += 1;
+        self.it
+            .next()
+            .ok_or_else(|| self.field_error(field, FieldProblem::Missing))
+    }
+
+    /// An error about the field just read (or missing).
+    pub(crate) fn field_error(&self, field: &'static str, problem: FieldProblem) -> Error {
+        Error::Field {
+            path: self.path.to_path_buf(),
+            line: self.line,
+            column: self.column,
+            field,
+            problem,
+        }
+    }
+
+    /// An error about the record as a whole.
+    pub(crate) fn record_error(&self, problem: RecordProblem) -> Error {
+        Error::Record {
+            path: self.path.to_path_buf(),
+            line: self.line,
+            problem,
+        }
+    }
+
+    /// The next field as a finite number.
+    pub(crate) fn f64(&mut self, field: &'static str) -> Result<f64> {
+        let text = self.next_text(field)?;
+        match text.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            Ok(_) => Err(self.field_error(field, FieldProblem::NotFinite(text.to_owned()))),
+            Err(_) => Err(self.field_error(field, FieldProblem::NotANumber(text.to_owned()))),
+        }
+    }
+
+    /// The next field as a finite number that is `>= 0`.
+    pub(crate) fn non_negative(&mut self, field: &'static str) -> Result<f64> {
+        let v = self.f64(field)?;
+        if v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(self.field_error(
+                field,
+                FieldProblem::OutOfRange {
+                    value: v.to_string(),
+                    expected: ">= 0",
+                },
+            ))
+        }
+    }
+
+    /// The next field as a non-negative integer.
+    pub(crate) fn u32(&mut self, field: &'static str) -> Result<u32> {
+        let text = self.next_text(field)?;
+        text.parse::<u32>()
+            .map_err(|_| self.field_error(field, FieldProblem::NotAnInteger(text.to_owned())))
+    }
+
+    /// Checks that no field is left (the format has `columns` columns).
+    pub(crate) fn end(mut self, columns: usize) -> Result<()> {
+        let extra = self.it.by_ref().count();
+        if extra == 0 {
+            Ok(())
+        } else {
+            Err(self.record_error(RecordProblem::TooManyFields {
+                expected: columns,
+                found: columns + extra,
+            }))
+        }
+    }
+}
+
+/// Tracks that time stamps never decrease (repeats are allowed).
+pub(crate) struct TimeOrder {
+    previous: f64,
+}
+
+impl TimeOrder {
+    pub(crate) fn new() -> Self {
+        Self {
+            previous: f64::NEG_INFINITY,
+        }
+    }
+
+    pub(crate) fn check(&mut self, fields: &Fields<'_>, time: f64) -> Result<()> {
+        if time < self.previous {
+            return Err(fields.record_error(RecordProblem::TimeGoesBack {
+                time,
+                previous: self.previous,
+            }));
+        }
+        self.previous = time;
+        Ok(())
+    }
+}
