@@ -21,9 +21,15 @@
 //! give the same posterior (f64: 1e-9; f32: against the f64 reference).
 //!
 //! After criterion's own output, a table is printed from criterion's
-//! `estimates.json` files (mean point estimate): ns per call, ratio to the
-//! closed form and to plain nalgebra of the same precision and group, and the
-//! speed-up over the seed-003 timings of one correction (Table 3).
+//! `estimates.json` files of this run (mean point estimate, median alongside):
+//! ns per call, ratio to the closed form and to plain nalgebra of the same
+//! precision and group, and the speed-up over the seed-003 timings of one
+//! correction (Table 3). The directory is `$CRITERION_HOME`, else
+//! `$CARGO_TARGET_DIR/criterion`, else `<target>/criterion` next to this binary.
+//!
+//! Note: timings of generic code depend on LLVM's inlining decisions, which
+//! depend on how many instances share a nalgebra operator in the binary;
+//! compare variants within one run.
 //!
 //! Run: `cargo bench -p locus-core --bench ekf_step` (criterion arguments,
 //! e.g. a filter, go after `--`).
@@ -555,20 +561,32 @@ fn bench_correct(c: &mut Criterion) {
             nalgebra_correct(&pr.x, &pr.p, &h, &zhat, &r, black_box(z))
         })
     });
+    // Every variant yields the posterior belief (what a caller keeps).
+    let post = |r: Result<locus_core::Correction<f64, 3, 2>, locus_core::Error>| {
+        r.expect("correct").belief
+    };
     g.bench_function("locus_plain_f64", |b| {
-        b.iter(|| black_box(&p64).correct(black_box(&prior), black_box(o), black_box(z)))
+        b.iter(|| post(black_box(&p64).correct(black_box(&prior), black_box(o), black_box(z))))
     });
     g.bench_function("locus_joseph_f64", |b| {
-        b.iter(|| black_box(&j64).correct(black_box(&prior), black_box(o), black_box(z)))
+        b.iter(|| post(black_box(&j64).correct(black_box(&prior), black_box(o), black_box(z))))
     });
     g.bench_function("locus_seq_plain_f64", |b| {
-        b.iter(|| black_box(&p64).correct_sequential(black_box(&prior), black_box(o), black_box(z)))
+        b.iter(|| {
+            post(black_box(&p64).correct_sequential(black_box(&prior), black_box(o), black_box(z)))
+        })
     });
     g.bench_function("locus_seq_joseph_f64", |b| {
-        b.iter(|| black_box(&j64).correct_sequential(black_box(&prior), black_box(o), black_box(z)))
+        b.iter(|| {
+            post(black_box(&j64).correct_sequential(black_box(&prior), black_box(o), black_box(z)))
+        })
     });
     g.bench_function("schedule_11_f64", |b| {
-        b.iter(|| schedule::correct_11_step(black_box(&prior), black_box(o), black_box(z)))
+        b.iter(|| {
+            schedule::correct_11_step(black_box(&prior), black_box(o), black_box(z))
+                .expect("11-step")
+                .belief()
+        })
     });
     let prior_ads = StateAndCovariance::new(prior.x, prior.p);
     g.bench_function("adskalman_joseph_f64", |b| {
@@ -601,10 +619,11 @@ fn criterion_dir() -> Option<PathBuf> {
     Some(exe.parent()?.parent()?.parent()?.join("criterion"))
 }
 
-/// The mean point estimate (ns) of a criterion `estimates.json`, parsed by
-/// hand (`{"mean":{"confidence_interval":{...},"point_estimate":X,...},...}`).
-fn mean_point_estimate(json: &str) -> Option<f64> {
-    let rest = &json[json.find("\"mean\"")?..];
+/// The point estimate (ns) of statistic `stat` ("mean", "median") of a
+/// criterion `estimates.json`, parsed by hand
+/// (`{"mean":{"confidence_interval":{...},"point_estimate":X,...},...}`).
+fn point_estimate(json: &str, stat: &str) -> Option<f64> {
+    let rest = &json[json.find(&format!("\"{stat}\""))?..];
     let key = "\"point_estimate\"";
     let rest = rest[rest.find(key)? + key.len()..]
         .trim_start()
@@ -629,37 +648,47 @@ fn print_table(started: SystemTime, groups: &[(&str, &[&str])]) {
         return;
     };
     // Only estimates written by this run (a filter may have skipped some).
-    let read = |group: &str, id: &str| -> Option<f64> {
+    // (mean, median) in ns.
+    let read = |group: &str, id: &str| -> Option<(f64, f64)> {
         let path = dir.join(group).join(id).join("new").join("estimates.json");
         let fresh = std::fs::metadata(&path).and_then(|m| m.modified()).ok()? >= started;
         if !fresh {
             return None;
         }
-        mean_point_estimate(&std::fs::read_to_string(&path).ok()?)
+        let json = std::fs::read_to_string(&path).ok()?;
+        Some((
+            point_estimate(&json, "mean")?,
+            point_estimate(&json, "median")?,
+        ))
     };
     println!();
     println!(
-        "Summary (mean of criterion's estimates, {}):",
+        "Summary (criterion's estimates.json under {}):",
         dir.display()
     );
     println!(
-        "x closed / x nalgebra: time ratio to the closed form / plain nalgebra of the same group and precision;"
+        "ns: criterion's mean point estimate; (median): its median, more robust on a busy machine;"
     );
+    println!("x closed / x nalgebra: ratio of the means to the closed form / plain nalgebra");
+    println!("  of the same group and precision;");
+    println!("seed 003 columns: speed-up (from the mean) over one correction on that platform");
     println!(
-        "seed 003 columns: speed-up over one correction on that platform (the step columns include the predict)."
+        "  (Table 3; the step rows include the predict, the reference is the correction alone)."
     );
     let mut printed = false;
     for (group, ids) in groups {
-        let times: Vec<(&str, Option<f64>)> = ids.iter().map(|id| (*id, read(group, id))).collect();
+        let times: Vec<(&str, Option<(f64, f64)>)> =
+            ids.iter().map(|id| (*id, read(group, id))).collect();
         if times.iter().all(|(_, t)| t.is_none()) {
             continue;
         }
         printed = true;
         println!();
         println!(
-            "{:<32} {:>9} {:>9} {:>10}  {:>14} {:>16} {:>14}",
+            "{:<26} {:>8} {:>8} {:>9} {:>10}  {:>14} {:>16} {:>14}",
             format!("{group}/"),
             "ns",
+            "(median)",
             "x closed",
             "x nalgebra",
             SEED_003[0].0,
@@ -670,10 +699,10 @@ fn print_table(started: SystemTime, groups: &[(&str, &[&str])]) {
             times
                 .iter()
                 .find(|(id, _)| *id == name)
-                .and_then(|(_, t)| *t)
+                .and_then(|(_, t)| t.map(|t| t.0))
         };
         for (id, t) in &times {
-            let Some(t) = *t else { continue };
+            let Some((t, median)) = *t else { continue };
             let prec = if id.ends_with("_f32") { "f32" } else { "f64" };
             let ratio = |r: Option<f64>| r.map_or("-".to_string(), |r| format!("{:.2}", t / r));
             let speedups: Vec<String> = SEED_003
@@ -681,9 +710,10 @@ fn print_table(started: SystemTime, groups: &[(&str, &[&str])]) {
                 .map(|(_, us)| format!("{:.0}x", us * 1000.0 / t))
                 .collect();
             println!(
-                "{:<32} {:>9.1} {:>9} {:>10}  {:>14} {:>16} {:>14}",
+                "{:<26} {:>8.1} {:>8.1} {:>9} {:>10}  {:>14} {:>16} {:>14}",
                 id,
                 t,
+                median,
                 ratio(lookup(&format!("closed_{prec}"))),
                 ratio(lookup(&format!("nalgebra_{prec}"))),
                 speedups[0],

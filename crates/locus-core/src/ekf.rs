@@ -15,15 +15,16 @@
 use nalgebra::{SMatrix, SVector};
 
 use crate::belief::all_finite;
+use crate::linalg::{mul, mul_bt, sandwich, spd_inverse};
 use crate::{Belief, ChiSquareGate, Error, Input, MeasurementModel, MotionModel, Scalar};
 
 /// How the corrected covariance `P+` is computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum CovarianceUpdate {
     /// Joseph form `(I - G H) P (I - G H)^T + G (V R V^T) G^T`: positive
-    /// semi-definite by construction and valid for any gain; the result is
-    /// symmetrised, `(P + P^T)/2`, to remove the rounding asymmetry of the
-    /// products. The default.
+    /// semi-definite by construction and valid for any gain; each product is
+    /// computed on its upper triangle and mirrored, so the result is exactly
+    /// symmetric. The default.
     #[default]
     Joseph,
     /// The papers' plain form `P+ = P- - G H P-` (cheapest; can lose symmetry
@@ -51,7 +52,7 @@ pub struct Correction<T: Scalar, const N: usize, const M: usize> {
     /// The normalised innovation squared `nu^T S^-1 nu` (dimensionless).
     pub nis: T,
     /// Degrees of freedom of the NIS: the number of present components.
-    pub dof: usize,
+    pub dof: u32,
     /// Whether the update was applied (`false`: rejected by the gate).
     pub applied: bool,
 }
@@ -83,7 +84,7 @@ struct Linearised<T: Scalar, const N: usize, const M: usize> {
     nu: SVector<T, M>,
     h: SMatrix<T, M, N>,
     r: SMatrix<T, M, M>,
-    dof: usize,
+    dof: u32,
 }
 
 impl<T: Scalar> Ekf<T> {
@@ -99,10 +100,16 @@ impl<T: Scalar> Ekf<T> {
     }
 
     /// Prediction step: `X- = f(X+, u, 0)`, `P- = A P+ A^T + W Q W^T`
-    /// (kept exactly symmetric).
+    /// (kept exactly symmetric; `P+` must be symmetric).
     ///
     /// Errors: non-finite belief, input, noise or model output. On error the
     /// caller's belief is untouched (it is only borrowed).
+    ///
+    /// Checking: NaN and infinities propagate through every product into
+    /// `X-` or `P-`, so the fast path checks only the outputs (and the
+    /// model's own input check); if they are not finite, a cold path finds
+    /// and names the offending input.
+    #[inline(always)]
     pub fn predict<Mo, const N: usize, const NQ: usize>(
         &self,
         belief: &Belief<T, N>,
@@ -112,29 +119,19 @@ impl<T: Scalar> Ekf<T> {
     where
         Mo: MotionModel<T, N, NQ>,
     {
-        belief.validate()?;
-        if !model.input_is_finite(u) {
-            return Err(Error::NonFinite(Input::Control));
+        if model.input_is_finite(u) {
+            let q = model.noise_cov(u);
+            let (x, a, w) = model.linearize(&belief.x, u);
+            let p = sandwich(&a, &belief.p) + sandwich(&w, &q);
+            if all_finite(x.as_slice()) && all_finite(p.as_slice()) {
+                return Ok(Belief { x, p });
+            }
         }
-        let q = model.noise_cov(u);
-        if !all_finite(q.as_slice()) {
-            return Err(Error::NonFinite(Input::ProcessNoise));
-        }
-        let x = model.f(&belief.x, u, &SVector::zeros());
-        let a = model.jacobian_state(&belief.x, u);
-        let w = model.jacobian_noise(&belief.x, u);
-        if !(all_finite(x.as_slice()) && all_finite(a.as_slice()) && all_finite(w.as_slice())) {
-            return Err(Error::NonFinite(Input::MotionModel));
-        }
-        let p = a * belief.p * a.transpose() + w * q * w.transpose();
-        let p = symmetrise(p);
-        if !all_finite(p.as_slice()) {
-            return Err(Error::NonFinite(Input::Covariance));
-        }
-        Ok(Belief { x, p })
+        Err(diagnose_predict(belief, model, u))
     }
 
     /// Batch correction with every component present.
+    #[inline]
     pub fn correct<Me, const N: usize, const M: usize>(
         &self,
         belief: &Belief<T, N>,
@@ -155,6 +152,7 @@ impl<T: Scalar> Ekf<T> {
     /// predicted at this state; `S` not positive definite; every component
     /// missing. A gated-out measurement is not an error: the result has
     /// `applied == false` and the prior belief.
+    #[inline(always)]
     pub fn correct_masked<Me, const N: usize, const M: usize>(
         &self,
         belief: &Belief<T, N>,
@@ -165,41 +163,63 @@ impl<T: Scalar> Ekf<T> {
     where
         Me: MeasurementModel<T, N, M>,
     {
-        let lin = linearise(belief, model, z, mask)?;
+        let dof = present(mask)?;
+        let Some(lin) = linearise_unchecked(belief, model, z, mask, dof) else {
+            return Err(diagnose_correct(belief, model, z, mask).unwrap_or(Error::NoMeasurement));
+        };
         let p = &belief.p;
-        let pht = p * lin.h.transpose();
-        let s = lin.h * pht + lin.r;
-        let chol = s.cholesky().ok_or(Error::InnovationNotPositiveDefinite)?;
-        // G^T = S^-1 (P H^T)^T  (S symmetric).
-        let g = chol.solve(&pht.transpose()).transpose();
-        let nis = lin.nu.dot(&chol.solve(&lin.nu));
+        let pht = mul_bt(p, &lin.h);
+        let s = mul(&lin.h, &pht) + lin.r;
+        let Some(s_inv) = spd_inverse(&s) else {
+            return Err(diagnose_correct(belief, model, z, mask)
+                .unwrap_or(Error::InnovationNotPositiveDefinite));
+        };
+        // y = S^-1 nu serves both the NIS (nu . y) and the state update
+        // (G nu = P H^T y), so the state does not wait for the gain.
+        let y = mul(&s_inv, &lin.nu);
+        let nis = lin.nu.dot(&y);
         if !nis.is_finite() {
-            return Err(Error::InnovationNotPositiveDefinite);
+            return Err(diagnose_correct(belief, model, z, mask)
+                .unwrap_or(Error::InnovationNotPositiveDefinite));
         }
         if let Some(gate) = &self.gate {
-            if !gate.accepts(nis, lin.dof) {
+            if !gate.accepts(nis, dof as usize) {
+                if let Some(err) = diagnose_correct(belief, model, z, mask) {
+                    return Err(err);
+                }
                 return Ok(Correction {
                     belief: *belief,
                     innovation: lin.nu,
                     nis,
-                    dof: lin.dof,
+                    dof,
                     applied: false,
                 });
             }
         }
-        let x = belief.x + g * lin.nu;
+        let x = belief.x + mul(&pht, &y);
+        let g = mul(&pht, &s_inv);
         let p_post = match self.update {
             CovarianceUpdate::Joseph => {
-                let ikh = SMatrix::<T, N, N>::identity() - g * lin.h;
-                symmetrise(ikh * p * ikh.transpose() + g * lin.r * g.transpose())
+                let ikh = SMatrix::<T, N, N>::identity() - mul(&g, &lin.h);
+                sandwich(&ikh, p) + sandwich(&g, &lin.r)
             }
-            CovarianceUpdate::Plain => p - g * pht.transpose(),
-            CovarianceUpdate::ForcedSymmetric => symmetrise(p - g * pht.transpose()),
+            CovarianceUpdate::Plain => p - mul_bt(&g, &pht),
+            CovarianceUpdate::ForcedSymmetric => symmetrise(p - mul_bt(&g, &pht)),
         };
-        finish(x, p_post, lin.nu, nis, lin.dof)
+        if all_finite(x.as_slice()) && all_finite(p_post.as_slice()) {
+            return Ok(Correction {
+                belief: Belief { x, p: p_post },
+                innovation: lin.nu,
+                nis,
+                dof,
+                applied: true,
+            });
+        }
+        Err(diagnose_correct(belief, model, z, mask).unwrap_or(Error::NonFinite(Input::Covariance)))
     }
 
     /// Sequential scalar correction with every component present.
+    #[inline]
     pub fn correct_sequential<Me, const N: usize, const M: usize>(
         &self,
         belief: &Belief<T, N>,
@@ -223,6 +243,7 @@ impl<T: Scalar> Ekf<T> {
     /// is the sum of the scalar normalised innovations, which equals the batch
     /// `nu^T S^-1 nu`; the gate (if any) is applied to it, and a rejected
     /// update returns the prior.
+    #[inline]
     pub fn correct_sequential_masked<Me, const N: usize, const M: usize>(
         &self,
         belief: &Belief<T, N>,
@@ -233,7 +254,11 @@ impl<T: Scalar> Ekf<T> {
     where
         Me: MeasurementModel<T, N, M>,
     {
-        let lin = linearise(belief, model, z, mask)?;
+        let dof = present(mask)?;
+        if let Some(err) = diagnose_correct(belief, model, z, mask) {
+            return Err(err);
+        }
+        let lin = linearise_unchecked(belief, model, z, mask, dof).ok_or(Error::NoMeasurement)?;
         let (nu_d, h_d, r_d) = if is_diagonal(&lin.r) {
             (lin.nu, lin.h, lin.r.diagonal())
         } else {
@@ -268,14 +293,14 @@ impl<T: Scalar> Ekf<T> {
             p = match self.update {
                 CovarianceUpdate::Joseph => {
                     let ikh = SMatrix::<T, N, N>::identity() - k * hi;
-                    symmetrise(ikh * p * ikh.transpose() + k * k.transpose() * r_d[i])
+                    sandwich(&ikh, &p) + mul_bt(&k, &k) * r_d[i]
                 }
                 CovarianceUpdate::Plain => p - k * a.transpose(),
                 CovarianceUpdate::ForcedSymmetric => symmetrise(p - k * a.transpose()),
             };
         }
         if let Some(gate) = &self.gate {
-            if !gate.accepts(nis, lin.dof) {
+            if !gate.accepts(nis, lin.dof as usize) {
                 return Ok(Correction {
                     belief: *belief,
                     innovation: lin.nu,
@@ -289,35 +314,35 @@ impl<T: Scalar> Ekf<T> {
     }
 }
 
-/// Evaluates `h`, `H`, `V R V^T` and the residual at the prior, checks them,
-/// and neutralises missing components.
-fn linearise<T, Me, const N: usize, const M: usize>(
+/// The number of present components, or an error if there is none.
+#[inline(always)]
+fn present<const M: usize>(mask: &Mask<M>) -> Result<u32, Error> {
+    let dof = mask.iter().filter(|present| **present).count() as u32;
+    if dof == 0 {
+        Err(Error::NothingToCorrect)
+    } else {
+        Ok(dof)
+    }
+}
+
+/// Evaluates `h`, `H`, `V R V^T` and the residual at the prior (unchecked),
+/// and neutralises missing components. `None` if the model has no
+/// measurement at this state.
+#[inline(always)]
+fn linearise_unchecked<T, Me, const N: usize, const M: usize>(
     belief: &Belief<T, N>,
     model: &Me,
     z: &SVector<T, M>,
     mask: &Mask<M>,
-) -> Result<Linearised<T, N, M>, Error>
+    dof: u32,
+) -> Option<Linearised<T, N, M>>
 where
     T: Scalar,
     Me: MeasurementModel<T, N, M>,
 {
-    belief.validate()?;
-    let dof = mask.iter().filter(|present| **present).count();
-    if dof == 0 {
-        return Err(Error::NothingToCorrect);
-    }
-    if (0..M).any(|i| mask[i] && !z[i].is_finite()) {
-        return Err(Error::NonFinite(Input::Measurement));
-    }
-    let z_hat = model.h(&belief.x).ok_or(Error::NoMeasurement)?;
+    let z_hat = model.h(&belief.x)?;
     let mut h = model.jacobian(&belief.x);
-    if !(all_finite(z_hat.as_slice()) && all_finite(h.as_slice())) {
-        return Err(Error::NonFinite(Input::MeasurementModel));
-    }
     let mut r = model.noise(&belief.x);
-    if !all_finite(r.as_slice()) {
-        return Err(Error::NonFinite(Input::MeasurementNoise));
-    }
     // Missing components of z may hold anything (even NaN): replace them by the
     // prediction before forming the residual, then neutralise them.
     let mut z_used = *z;
@@ -327,9 +352,6 @@ where
         }
     }
     let mut nu = model.residual(&z_used, &z_hat);
-    if !all_finite(nu.as_slice()) {
-        return Err(Error::NonFinite(Input::MeasurementModel));
-    }
     for i in 0..M {
         if !mask[i] {
             nu[i] = T::zero();
@@ -339,15 +361,84 @@ where
             r[(i, i)] = T::one();
         }
     }
-    Ok(Linearised { nu, h, r, dof })
+    Some(Linearised { nu, h, r, dof })
 }
 
+/// The cold path of `predict`: names the first non-finite input.
+#[cold]
+#[inline(never)]
+fn diagnose_predict<T, Mo, const N: usize, const NQ: usize>(
+    belief: &Belief<T, N>,
+    model: &Mo,
+    u: &Mo::Input,
+) -> Error
+where
+    T: Scalar,
+    Mo: MotionModel<T, N, NQ>,
+{
+    if let Err(err) = belief.validate() {
+        return err;
+    }
+    if !model.input_is_finite(u) {
+        return Error::NonFinite(Input::Control);
+    }
+    if !all_finite(model.noise_cov(u).as_slice()) {
+        return Error::NonFinite(Input::ProcessNoise);
+    }
+    let (x, a, w) = model.linearize(&belief.x, u);
+    if !(all_finite(x.as_slice()) && all_finite(a.as_slice()) && all_finite(w.as_slice())) {
+        return Error::NonFinite(Input::MotionModel);
+    }
+    // Finite inputs, non-finite result: the covariance overflowed.
+    Error::NonFinite(Input::Covariance)
+}
+
+/// The cold path of the corrections: the first non-finite input, or `None`
+/// if every input is finite (the caller then names the numerical failure).
+#[cold]
+#[inline(never)]
+fn diagnose_correct<T, Me, const N: usize, const M: usize>(
+    belief: &Belief<T, N>,
+    model: &Me,
+    z: &SVector<T, M>,
+    mask: &Mask<M>,
+) -> Option<Error>
+where
+    T: Scalar,
+    Me: MeasurementModel<T, N, M>,
+{
+    if let Err(err) = belief.validate() {
+        return Some(err);
+    }
+    if (0..M).any(|i| mask[i] && !z[i].is_finite()) {
+        return Some(Error::NonFinite(Input::Measurement));
+    }
+    let z_hat = model.h(&belief.x)?;
+    if !(all_finite(z_hat.as_slice()) && all_finite(model.jacobian(&belief.x).as_slice())) {
+        return Some(Error::NonFinite(Input::MeasurementModel));
+    }
+    if !all_finite(model.noise(&belief.x).as_slice()) {
+        return Some(Error::NonFinite(Input::MeasurementNoise));
+    }
+    let mut z_used = *z;
+    for i in 0..M {
+        if !mask[i] {
+            z_used[i] = z_hat[i];
+        }
+    }
+    if !all_finite(model.residual(&z_used, &z_hat).as_slice()) {
+        return Some(Error::NonFinite(Input::MeasurementModel));
+    }
+    None
+}
+
+#[inline(always)]
 fn finish<T: Scalar, const N: usize, const M: usize>(
     x: SVector<T, N>,
     p: SMatrix<T, N, N>,
     innovation: SVector<T, M>,
     nis: T,
-    dof: usize,
+    dof: u32,
 ) -> Result<Correction<T, N, M>, Error> {
     if !all_finite(x.as_slice()) {
         return Err(Error::NonFinite(Input::State));

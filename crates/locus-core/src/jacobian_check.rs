@@ -108,7 +108,8 @@ pub fn compare<T: Scalar, const R: usize, const C: usize>(
     Ok(())
 }
 
-/// Checks a motion model's `A = df/dX` and `W = df/dq` at `(x, u, q = 0)`.
+/// Checks a motion model's `A = df/dX` and `W = df/dq` at `(x, u, q = 0)`,
+/// and that its `linearize` agrees with `f`, `A` and `W`.
 pub fn check_motion_model<T, Mo, const N: usize, const NQ: usize>(
     model: &Mo,
     x: &SVector<T, N>,
@@ -127,7 +128,18 @@ where
     compare("A", &model.jacobian_state(x, u), &num_a, tol)?;
     let num_w =
         numeric_jacobian(|qq| Some(model.f(x, u, qq)), diff, &q0, step).expect("f is total");
-    compare("W", &model.jacobian_noise(x, u), &num_w, tol)
+    compare("W", &model.jacobian_noise(x, u), &num_w, tol)?;
+    // An overridden `linearize` must agree with the separate methods.
+    let (fx, a, w) = model.linearize(x, u);
+    let f0 = model.f(x, u, &q0);
+    compare(
+        "linearize f",
+        &SMatrix::<T, N, 1>::from_column_slice(fx.as_slice()),
+        &SMatrix::<T, N, 1>::from_column_slice(f0.as_slice()),
+        tol,
+    )?;
+    compare("linearize A", &a, &model.jacobian_state(x, u), tol)?;
+    compare("linearize W", &w, &model.jacobian_noise(x, u), tol)
 }
 
 /// Checks a measurement model's `H = dh/dX` at `x`.

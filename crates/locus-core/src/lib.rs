@@ -9,6 +9,7 @@ pub mod ekf;
 pub mod error;
 pub mod gate;
 pub mod jacobian_check;
+mod linalg;
 pub mod model;
 pub mod schedule;
 

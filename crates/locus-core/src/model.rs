@@ -49,6 +49,23 @@ pub trait MotionModel<T: Scalar, const N: usize, const NQ: usize> {
         a - b
     }
 
+    /// `(f(X, u, 0), A, W)` together, as the filter needs them. The default
+    /// calls the three methods; override it to share work between them (one
+    /// `sin_cos` instead of three). The Jacobian checker verifies that an
+    /// override agrees with the separate methods.
+    #[inline]
+    fn linearize(
+        &self,
+        x: &SVector<T, N>,
+        u: &Self::Input,
+    ) -> (SVector<T, N>, SMatrix<T, N, N>, SMatrix<T, N, NQ>) {
+        (
+            self.f(x, u, &SVector::zeros()),
+            self.jacobian_state(x, u),
+            self.jacobian_noise(x, u),
+        )
+    }
+
     /// The mapped process noise `W Q W^T` at `(x, u)`.
     fn process_noise(&self, x: &SVector<T, N>, u: &Self::Input) -> SMatrix<T, N, N> {
         let w = self.jacobian_noise(x, u);

@@ -98,6 +98,24 @@ impl<T: Scalar> MotionModel<T, 3, 2> for DiffDrive<T> {
         SMatrix::<T, 3, 2>::new(c, -d * half * s, s, d * half * c, T::zero(), T::one())
     }
 
+    /// One `sin_cos` for `f`, `A` and `W`.
+    #[inline]
+    fn linearize(
+        &self,
+        x: &SVector<T, 3>,
+        u: &WheelTravel<T>,
+    ) -> (SVector<T, 3>, SMatrix<T, 3, 3>, SMatrix<T, 3, 2>) {
+        let (d, dth) = self.increments(u);
+        let half = cast::<T>(0.5);
+        let (s, c) = (x[2] + dth * half).sin_cos();
+        let (o, z) = (T::one(), T::zero());
+        (
+            Vector3::new(x[0] + d * c, x[1] + d * s, wrap_angle(x[2] + dth)),
+            SMatrix::<T, 3, 3>::new(o, z, -d * s, z, o, d * c, z, z, o),
+            SMatrix::<T, 3, 2>::new(c, -d * half * s, s, d * half * c, z, o),
+        )
+    }
+
     fn noise_cov(&self, _u: &WheelTravel<T>) -> SMatrix<T, 2, 2> {
         Matrix2::new(self.q11, T::zero(), T::zero(), self.q22)
     }
