@@ -33,7 +33,7 @@ step "clippy (-D warnings)"
 cargo clippy --workspace --all-targets --locked -- -D warnings
 
 step "no_std build for thumbv7em-none-eabihf"
-cargo build --locked -p locus-core -p locus-models --no-default-features --target thumbv7em-none-eabihf
+cargo build --locked -p locus-core -p locus-models -p locus-odometry --no-default-features --target thumbv7em-none-eabihf
 
 step "tests (optimised test profile)"
 cargo test --workspace --locked

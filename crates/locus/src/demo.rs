@@ -10,7 +10,7 @@ use anyhow::{Context, Result, ensure};
 use clap::Args;
 use comfy_table::{Table, presets::UTF8_FULL};
 use locus_core::nalgebra::{Matrix3, Vector2, Vector3};
-use locus_core::{Belief, ChiSquareGate, Ekf, MotionModel, wrap_angle};
+use locus_core::{Belief, ChiSquareGate, ConsistencyMonitor, Ekf, MotionModel, wrap_angle};
 use locus_models::{AxisWall, DiffDrive, IrPair, IrPairObservation, WheelTravel};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
@@ -63,6 +63,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     );
     let mut odo = start;
     let (mut applied, mut gated, mut observations) = (0usize, 0usize, 0usize);
+    // NIS over the last 50 corrections against its 95 % chi-square bounds.
+    let mut monitor = ConsistencyMonitor::<50>::new(0.95)?;
     let mut sq = [[0.0f64; 3]; 2]; // squared errors: [ekf, odo][x, y, theta]
 
     for _ in 0..args.steps {
@@ -97,6 +99,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
                 r22: args.ir_sigma.powi(2),
             };
             let c = ekf.correct(&ekf_belief, &obs, &obs.z())?;
+            monitor.push(c.nis, c.dof);
             if c.applied {
                 applied += 1;
             } else {
@@ -142,6 +145,11 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     println!("{table}");
     println!(
         "IR observations: {observations}, applied {applied}, gated out {gated} (chi-square 99.9 %)"
+    );
+    let nis = monitor.assess();
+    println!(
+        "NIS consistency (last {} corrections): mean {:.2} (95 % bounds {:.2}..{:.2} for dof {:.0}): {}",
+        nis.samples, nis.mean_nis, nis.lower, nis.upper, nis.mean_dof, nis.verdict
     );
     Ok(())
 }
