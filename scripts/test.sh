@@ -32,6 +32,9 @@ cargo fmt --all -- --check
 step "clippy (-D warnings)"
 cargo clippy --workspace --all-targets --locked -- -D warnings
 
+step "docs (-D warnings)"
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace --locked
+
 step "no_std build for thumbv7em-none-eabihf"
 cargo build --locked -p locus-core -p locus-models -p locus-odometry --no-default-features --target thumbv7em-none-eabihf
 
