@@ -133,6 +133,14 @@ pub struct SpeedConfig<T> {
     /// The switching state at start. Default [`Mode::Period`] (a robot starts
     /// at rest).
     pub initial_mode: Mode,
+    /// How far the encoder's A/B phase and duty-cycle errors can move a single
+    /// x4 edge from its ideal position, counts (>= 0; 0 for an ideal
+    /// encoder, the default). A window's count is then uncertain by
+    /// `1 + edge_spread` counts, and the pulse-mode and standstill
+    /// resolutions are reported as `K / W (1 + edge_spread)` and
+    /// `K / E (1 + edge_spread)`. Period mode over a full line period
+    /// (`period_edges = 4`) is not affected: the errors cancel.
+    pub edge_spread: T,
 }
 
 impl<T: Real> SpeedConfig<T> {
@@ -149,6 +157,7 @@ impl<T: Real> SpeedConfig<T> {
             period_edges: 4,
             standstill_timeout: T::from_f64(0.1),
             initial_mode: Mode::Period,
+            edge_spread: T::ZERO,
         }
     }
 
@@ -201,6 +210,12 @@ impl<T: Real> SpeedConfig<T> {
         if !positive(self.speed_scale()) {
             return Err(Error::InvalidParameter(
                 "pi R f / (2 N G) must be finite and > 0",
+            ));
+        }
+        let spread_ok = self.edge_spread >= T::ZERO && self.edge_spread.is_finite();
+        if !spread_ok {
+            return Err(Error::InvalidParameter(
+                "edge_spread must be finite and >= 0 counts",
             ));
         }
         Ok(())
@@ -419,7 +434,7 @@ impl<T: Real> SpeedEstimator<T> {
         Estimate {
             speed: self.k * T::from_i32(count) / w,
             mode: Mode::Pulse,
-            resolution: self.k / w,
+            resolution: self.k / w * (T::ONE + self.config.edge_spread),
             from_tick: self.window_start,
             to_tick: now,
         }
@@ -438,7 +453,7 @@ impl<T: Real> SpeedEstimator<T> {
             return Some(Estimate {
                 speed: T::ZERO,
                 mode: Mode::Period,
-                resolution: self.k / T::from_u32(quiet),
+                resolution: self.k / T::from_u32(quiet) * (T::ONE + self.config.edge_spread),
                 from_tick: self.last_activity,
                 to_tick: now,
             });

@@ -5,14 +5,15 @@
 //! to the estimator, which closes a window every T = 10 ms. Every estimate is
 //! compared with the true average speed over the span it reports:
 //!
-//! * pulse mode: over the window; the error must be below the resolution
-//!   `K / W` times `1 + spread`, where `spread` (counts) is how far the
-//!   encoder's phase and duty-cycle errors move single edges (0 for an ideal
+//! * pulse mode: over the window; the error must be below the reported
+//!   resolution `K / W (1 + edge_spread)`, where the configured
+//!   `edge_spread` (counts) is how far the encoder's phase and duty-cycle
+//!   errors move single edges (the generator's value; 0 for an ideal
 //!   encoder);
 //! * period mode: over the span between the true instants of its first and
 //!   last edge; the error must be below the reported resolution
 //!   `S / (C - 1)` (with `M = 4` edges per span the channel errors cancel);
-//! * standstill: over the quiet span; below `K / E` times `1 + spread`.
+//! * standstill: over the quiet span; below the reported `K / E (1 + edge_spread)`.
 //!
 //! The mode switch is checked for chatter with speeds hovering at each
 //! threshold.
@@ -106,7 +107,12 @@ fn run<T: Real>(
     seed: u64,
 ) -> Run {
     assert_eq!(wave.sample_hz, F);
-    let spread = wave.encoder.spread_counts();
+    // The estimator is told the encoder's edge spread, as a user would
+    // configure it from the encoder's datasheet.
+    let config = SpeedConfig {
+        edge_spread: T::from_f64(wave.encoder.spread_counts()),
+        ..config
+    };
     let mut samples = wave.samples(ticks, glitch_prob, seed);
     let first = samples.next().expect("samples");
     let mut dec = QuadratureDecoder::new(first.levels.0, first.levels.1, Counter::paper());
@@ -126,12 +132,8 @@ fn run<T: Real>(
         };
         let (t0, t1) = (f64::from(e.from_tick) / F, f64::from(e.to_tick) / F);
         let (class, truth, bound) = match e.mode {
-            Mode::Pulse => (Class::Pulse, avg(t0, t1), (1.0 + spread) * est.resolution),
-            Mode::Period if est.speed == 0.0 => (
-                Class::Standstill,
-                avg(t0, t1),
-                (1.0 + spread) * est.resolution,
-            ),
+            Mode::Pulse => (Class::Pulse, avg(t0, t1), est.resolution),
+            Mode::Period if est.speed == 0.0 => (Class::Standstill, avg(t0, t1), est.resolution),
             Mode::Period => {
                 let te0 = wave.edge_time(u64::from(e.from_tick));
                 let te1 = wave.edge_time(u64::from(e.to_tick));
@@ -396,13 +398,12 @@ fn standstill_reads_zero_in_period_mode() {
             .iter()
             .all(|c| c.est.speed == 0.0 && c.est.mode == Mode::Period)
     );
-    // The bound K / E tightens as the quiet span grows.
+    // The bound K / E (1 + edge_spread) tightens as the quiet span grows.
     let last = r.checked.last().unwrap();
     assert_eq!(last.est.from_tick, 0);
-    assert!(
-        (last.est.resolution - paper().speed_scale() as f64 / f64::from(last.est.to_tick)).abs()
-            < 1e-9
-    );
+    let expected = paper().speed_scale() as f64 / f64::from(last.est.to_tick)
+        * (1.0 + wave.encoder.spread_counts());
+    assert!((last.est.resolution - expected).abs() < 1e-9);
     assert_eq!(r.switches, 0);
 }
 
