@@ -2,6 +2,7 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
+pub mod association;
 pub mod camera;
 pub mod diff_drive;
 pub mod ir_wall;
@@ -12,6 +13,7 @@ pub mod skid_steer;
 pub mod tricycle;
 pub mod unicycle;
 
+pub use association::associate_ir_wall;
 pub use camera::{CameraMark, CameraMarks, CameraMarks4, EulerRotation, Intrinsics, RandomWalk6};
 pub use diff_drive::{DiffDrive, WheelTravel};
 pub use ir_wall::{AxisWall, IrPair, IrPairObservation, Side, WallAxis};
