@@ -1,0 +1,18 @@
+//! Seeded 2-D simulator of Locus: a world of wall segments, robots with
+//! ground-truth kinematics (differential drive, skid-steer, tricycle) with
+//! configurable wheel slip and bumps, and noisy sensors: wheel encoders whose
+//! counts go through the firmware's quadrature decoder (`locus-odometry`),
+//! Sharp-type IR sensors through their nonlinear curve, and laser beams ray
+//! cast on the map. All randomness comes from a caller's seeded `StdRng`, so a
+//! run is reproducible from its seed.
+//!
+//! Scenarios, the closed loop and `locus run` build on this crate (issue 5).
+#![forbid(unsafe_code)]
+
+pub mod robot;
+pub mod sensors;
+pub mod world;
+
+pub use robot::{Command, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, WheelTravel};
+pub use sensors::{Encoder, IrPairSensor, Laser, SensorError, SharpIr};
+pub use world::{Hit, World};
