@@ -71,7 +71,7 @@
 //! panics and does not allocate.
 
 use locus_core::nalgebra::{SMatrix, SVector};
-use locus_core::{Error, Input, MeasurementModel, Scalar, cast};
+use locus_core::{Belief, Error, Input, MeasurementModel, Scalar, cast};
 
 use crate::camera::{SIGMA_PIXEL, paper_q};
 
@@ -79,36 +79,10 @@ use crate::camera::{SIGMA_PIXEL, paper_q};
 pub const DEFAULT_DT: f64 = 0.005;
 
 /// The observer's state: the estimate `x^` and the Riccati matrix `P`
-/// (paper 002, eq. 12, 15). Units: those of the model's state and their
-/// products. With `alpha > 0`, `P` is a weighted (inflated) covariance, not
-/// the covariance of the estimate.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ObserverState<T: Scalar, const N: usize> {
-    /// The estimate `x^`.
-    pub x: SVector<T, N>,
-    /// The Riccati matrix `P` (symmetric; positive definite while the
-    /// integration is stable).
-    pub p: SMatrix<T, N, N>,
-}
-
-impl<T: Scalar, const N: usize> ObserverState<T, N> {
-    /// A state from an estimate `x^_0` and `P0` (not checked: see
-    /// [`ObserverState::validate`]).
-    pub fn new(x: SVector<T, N>, p: SMatrix<T, N, N>) -> Self {
-        Self { x, p }
-    }
-
-    /// Checks that every entry of `x^` and `P` is finite.
-    pub fn validate(&self) -> Result<(), Error> {
-        if !all_finite(self.x.as_slice()) {
-            return Err(Error::NonFinite(Input::State));
-        }
-        if !all_finite(self.p.as_slice()) {
-            return Err(Error::NonFinite(Input::Covariance));
-        }
-        Ok(())
-    }
-}
+/// (paper 002, eq. 12, 15), as the core's [`Belief`] value. Units: those of
+/// the model's state and their products. With `alpha > 0`, `P` is a weighted
+/// (inflated) covariance, not the covariance of the estimate.
+pub type ObserverState<T, const N: usize> = Belief<T, N>;
 
 /// The continuous-time EKF observer of paper 002 (eq. 12-17), integrated by
 /// explicit Euler steps: configuration only (`alpha`, `Q`, `Theta`, `dt`),
