@@ -9,10 +9,12 @@
 //! Scenarios, the closed loop and `locus run` build on this crate (issue 5).
 #![forbid(unsafe_code)]
 
+pub mod closed_loop;
 pub mod robot;
 pub mod sensors;
 pub mod world;
 
+pub use closed_loop::{SquareConfig, StepRecord, Summary, run_square};
 pub use robot::{Command, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, WheelTravel};
 pub use sensors::{Encoder, IrPairSensor, Laser, SensorError, SharpIr};
 pub use world::{Hit, World};

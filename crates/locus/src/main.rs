@@ -4,6 +4,7 @@
 //! `locus-core` (the filter) and `locus-models` (the papers' models).
 
 mod demo;
+mod run;
 
 use std::process::ExitCode;
 
@@ -23,12 +24,17 @@ enum Command {
     /// Run the paper-001 EKF along one wall of the square arena and compare it
     /// with odometry alone (a small built-in example until the simulator lands).
     Demo(demo::DemoArgs),
+    /// Run a closed-loop scenario of the simulator (controller, encoders, IR
+    /// pair, EKF against odometry alone): prints a summary table and writes
+    /// `log.csv` (as the run goes) and `metrics.json`.
+    Run(run::RunArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo(args) => demo::run(&args),
+        Command::Run(args) => run::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

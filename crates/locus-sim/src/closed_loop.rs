@@ -1,0 +1,591 @@
+//! The closed loop of paper 001 on the `square` scenario (spec section 3):
+//! controller -> wheel speeds -> simulated differential-drive robot ->
+//! quadrature encoders -> EKF prediction ([`DiffDrive`]) -> IR pair readings ->
+//! data association ([`associate_ir_wall`]) -> EKF correction
+//! ([`IrPairObservation`]), with the controller steering on the EKF estimate.
+//! An odometry-only belief (prediction only) runs alongside for comparison.
+//!
+//! # One step of `dt` (s)
+//! 1. The path controller ([`FollowPath::square`]) maps the EKF pose to
+//!    `(V, W)`; [`wheel_speeds`] gives `V1` (right), `V2` (left).
+//! 2. The robot moves (exact arc, [`Kinematics::DifferentialDrive`]), with
+//!    random slip bumps making the encoders over-count.
+//! 3. Each wheel's measured travel drives an [`Encoder`]; the wrapping 20-bit
+//!    count difference since the last step times the count quantum gives
+//!    `d1` (right) and `d2` (left), m. The right encoder also carries a
+//!    constant calibration error ([`SquareConfig::right_scale_error`]).
+//! 4. Both beliefs are predicted with [`DiffDrive`].
+//! 5. The IR pair ([`IrPairSensor`]) reads the true walls; when both sensors
+//!    are in range the estimate picks the wall (or drops the reading) and the
+//!    EKF corrects (99 % chi-square gate by default).
+//!
+//! All randomness comes from one `StdRng` seeded with the run's seed, so a
+//! run is reproducible from `(config, seed)` (wall-clock timing aside).
+
+use std::time::Instant;
+
+use locus_control::{Controller, FollowPath, wheel_speeds};
+use locus_core::nalgebra::{Matrix3, Vector3};
+use locus_core::{Belief, ChiSquareGate, Ekf, chi2, wrap_angle};
+use locus_models::{DiffDrive, IrPair, IrPairObservation, WheelTravel, associate_ir_wall};
+use locus_odometry::{Wheel as EncoderWheel, wrapping_diff};
+use rand::SeedableRng;
+use rand::rngs::StdRng;
+use rand_distr::{Distribution, StandardNormal};
+
+use crate::robot::{Command, Kinematics, Pose, Robot, RobotError, SlipSchedule, Wheel};
+use crate::sensors::{Encoder, IrPairSensor, SensorError, SharpIr};
+use crate::world::World;
+
+/// Width of the encoders' wrapping counter (bits), as in
+/// [`locus_odometry::Counter::paper`].
+const COUNTER_BITS: u32 = locus_odometry::counter::PAPER_BITS;
+
+/// Errors of a closed-loop run.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A configuration value is invalid; the message names it.
+    #[error("invalid configuration: {0}")]
+    Config(&'static str),
+    /// The simulated robot rejected a command.
+    #[error("robot: {0}")]
+    Robot(#[from] RobotError),
+    /// A sensor failed.
+    #[error("sensor: {0}")]
+    Sensor(#[from] SensorError),
+    /// The filter failed (non-finite values, S not positive definite, ...).
+    #[error("filter: {0}")]
+    Filter(#[from] locus_core::Error),
+}
+
+/// Configuration of the `square` scenario. Every value is SI (m, s, rad);
+/// variances are per filter step. See [`SquareConfig::default`] for the
+/// \[assumed\] values of spec section 3.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SquareConfig {
+    /// Filter, controller and simulation step `dt` (s). Default 0.01 s (100 Hz).
+    pub dt: f64,
+    /// Number of laps of the square path. Default 2.
+    pub laps: usize,
+    /// Simulated time after which the run stops even if the laps are not
+    /// done (s). Default 600 s.
+    pub max_time: f64,
+    /// Distance between the wheels `b` (m). Default 0.112 m (Lego NXT).
+    pub wheelbase: f64,
+    /// Wheel radius (m). Default 0.028 m (NXT 56 mm wheel).
+    pub wheel_radius: f64,
+    /// Encoder lines per shaft revolution `N`; with x4 decoding the count per
+    /// wheel revolution is `4 N G`. Default 90 (with `G = 1`: 360 counts per
+    /// wheel revolution, the NXT motor's 1-degree resolution; 0.49 mm per count).
+    pub encoder_lines: u32,
+    /// Encoder-shaft revolutions per wheel revolution `G`. Default 1.
+    pub encoder_gear: f64,
+    /// Relative over-count of the right encoder (calibration error: the
+    /// true right wheel is this fraction larger than its nominal radius, the
+    /// filter uses the nominal one). Default 0.005.
+    pub right_scale_error: f64,
+    /// Slip bumps per wheel, placed at random over the first lap's wheel
+    /// travel. Default 3.
+    pub slip_bumps_per_wheel: usize,
+    /// Range of each bump's length (m of wheel travel). Default 0.02-0.08 m.
+    pub slip_length: (f64, f64),
+    /// Range of each bump's measured-travel scale. Default 1.02-1.10 (a
+    /// bump adds up to 8 mm to one wheel: a heading jump of up to 0.07 rad).
+    pub slip_scale: (f64, f64),
+    /// Initial pose of the estimate (m, m, rad): the first corner of the
+    /// path, heading along the first side. Default `(-0.85, -0.85, 0)`.
+    pub start: [f64; 3],
+    /// Standard deviation of the initial estimate (m, m, rad); the true
+    /// start is drawn from it. Default `(0.01, 0.01, 0.02)`.
+    pub initial_std: [f64; 3],
+    /// IR pair spacing `L` (m). Default 0.10 m.
+    pub ir_spacing: f64,
+    /// IR distance noise standard deviation (m). Default 0.005 m.
+    pub ir_sigma: f64,
+    /// Largest estimated pair-to-wall distance accepted by the data
+    /// association (m): the 0.30 m range plus a margin. Default 0.40 m.
+    pub association_range: f64,
+    /// `Q11 = var(e_d)` (m^2 per step). Default `(0.5 mm)^2`, the order of the
+    /// encoder quantum.
+    pub q11: f64,
+    /// `Q22 = var(e_dtheta)` (rad^2 per step). Default `(1e-3 rad)^2`
+    /// (tuned on seeds 1-30: mean NEES ~2.5, ~93 % of steps in the 95 %
+    /// interval).
+    pub q22: f64,
+    /// `R11 = var(e_ds1)` (m^2). Default `(0.005 m)^2`, the injected noise.
+    pub r11: f64,
+    /// `R22 = var(e_ds2)` (m^2). Default `(0.005 m)^2`.
+    pub r22: f64,
+    /// Confidence of the chi-square gate on the NIS (`None`: no gate).
+    /// Default 0.99.
+    pub gate_confidence: Option<f64>,
+    /// Path controller parameters (`V_ref` 0.1 m/s, ...).
+    pub control: locus_control::Config,
+}
+
+impl Default for SquareConfig {
+    fn default() -> Self {
+        Self {
+            dt: 0.01,
+            laps: 2,
+            max_time: 600.0,
+            wheelbase: 0.112,
+            wheel_radius: 0.028,
+            encoder_lines: 90,
+            encoder_gear: 1.0,
+            right_scale_error: 0.005,
+            slip_bumps_per_wheel: 3,
+            slip_length: (0.02, 0.08),
+            slip_scale: (1.02, 1.10),
+            start: [
+                -locus_control::SQUARE_HALF_SIDE,
+                -locus_control::SQUARE_HALF_SIDE,
+                0.0,
+            ],
+            initial_std: [0.01, 0.01, 0.02],
+            ir_spacing: 0.10,
+            ir_sigma: 0.005,
+            association_range: 0.40,
+            q11: 0.5e-3 * 0.5e-3,
+            q22: 1e-3 * 1e-3,
+            r11: 0.005 * 0.005,
+            r22: 0.005 * 0.005,
+            gate_confidence: Some(0.99),
+            control: locus_control::Config::default(),
+        }
+    }
+}
+
+impl SquareConfig {
+    /// `Ok(())` if every value is in its domain.
+    ///
+    /// # Errors
+    /// [`Error::Config`] naming the first bad value.
+    pub fn validate(&self) -> Result<(), Error> {
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        let checks: [(bool, &'static str); 12] = [
+            (pos(self.dt), "dt must be finite and > 0"),
+            (self.laps > 0, "laps must be >= 1"),
+            (pos(self.max_time), "max_time must be finite and > 0"),
+            (pos(self.wheelbase), "wheelbase must be finite and > 0"),
+            (
+                pos(self.wheel_radius),
+                "wheel_radius must be finite and > 0",
+            ),
+            (
+                self.right_scale_error.is_finite() && self.right_scale_error > -1.0,
+                "right_scale_error must be finite and > -1",
+            ),
+            (
+                self.start.iter().all(|v| v.is_finite()),
+                "start must be finite",
+            ),
+            (
+                self.initial_std.iter().all(|v| pos(*v)),
+                "initial_std must be finite and > 0",
+            ),
+            (pos(self.association_range), "association_range must be > 0"),
+            (
+                pos(self.q11) && pos(self.q22),
+                "Q11, Q22 must be finite and > 0",
+            ),
+            (
+                pos(self.r11) && pos(self.r22),
+                "R11, R22 must be finite and > 0",
+            ),
+            (
+                self.slip_length.0.is_finite()
+                    && self.slip_length.1.is_finite()
+                    && self.slip_scale.0.is_finite()
+                    && self.slip_scale.1.is_finite(),
+                "slip ranges must be finite",
+            ),
+        ];
+        match checks.iter().find(|(ok, _)| !ok) {
+            Some((_, msg)) => Err(Error::Config(msg)),
+            None => Ok(()),
+        }
+    }
+}
+
+/// What one step of the closed loop produced (SI units, world frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepRecord {
+    /// Step index (0-based).
+    pub step: usize,
+    /// Simulated time at the end of the step (s).
+    pub time: f64,
+    /// True pose.
+    pub truth: Pose,
+    /// EKF estimate `[x, y, theta]` (m, m, rad).
+    pub ekf: [f64; 3],
+    /// EKF covariance `[P_xx, P_yy, P_thth, P_xy]` (m^2, m^2, rad^2, m^2).
+    pub ekf_p: [f64; 4],
+    /// Odometry-only estimate `[x, y, theta]` (m, m, rad).
+    pub odometry: [f64; 3],
+    /// Wheel travels from the encoders `[d1 (right), d2 (left)]` (m).
+    pub wheel_travel: [f64; 2],
+    /// IR readings `(d_s1, d_s2)` (m) when both were in range.
+    pub ir: Option<(f64, f64)>,
+    /// Innovation `z - h(X-)` `[m, rad]` when a reading was associated with
+    /// a wall.
+    pub innovation: Option<[f64; 2]>,
+    /// NIS of that innovation (2 dof).
+    pub nis: Option<f64>,
+    /// Whether the correction was applied (passed the gate).
+    pub applied: bool,
+    /// NEES of the EKF after the step (3 dof, heading error wrapped).
+    pub nees: f64,
+}
+
+impl StepRecord {
+    /// Column names of [`StepRecord::csv_row`], units in brackets.
+    pub const CSV_COLUMNS: [&'static str; 22] = [
+        "step",
+        "time[s]",
+        "true_x[m]",
+        "true_y[m]",
+        "true_theta[rad]",
+        "ekf_x[m]",
+        "ekf_y[m]",
+        "ekf_theta[rad]",
+        "p_xx[m2]",
+        "p_yy[m2]",
+        "p_thth[rad2]",
+        "p_xy[m2]",
+        "odo_x[m]",
+        "odo_y[m]",
+        "odo_theta[rad]",
+        "ir_s1[m]",
+        "ir_s2[m]",
+        "innov_pos[m]",
+        "innov_theta[rad]",
+        "nis",
+        "applied",
+        "nees",
+    ];
+
+    /// The CSV header line (no newline).
+    pub fn csv_header() -> String {
+        Self::CSV_COLUMNS.join(",")
+    }
+
+    /// The record as one CSV line (no newline); absent values are empty.
+    pub fn csv_row(&self) -> String {
+        fn opt(v: Option<f64>) -> String {
+            v.map_or_else(String::new, |v| format!("{v:.9}"))
+        }
+        let f = |v: f64| format!("{v:.9}");
+        let (s1, s2) = self.ir.unzip();
+        let fields = [
+            self.step.to_string(),
+            format!("{:.2}", self.time),
+            f(self.truth.x),
+            f(self.truth.y),
+            f(self.truth.theta),
+            f(self.ekf[0]),
+            f(self.ekf[1]),
+            f(self.ekf[2]),
+            format!("{:.6e}", self.ekf_p[0]),
+            format!("{:.6e}", self.ekf_p[1]),
+            format!("{:.6e}", self.ekf_p[2]),
+            format!("{:.6e}", self.ekf_p[3]),
+            f(self.odometry[0]),
+            f(self.odometry[1]),
+            f(self.odometry[2]),
+            opt(s1),
+            opt(s2),
+            opt(self.innovation.map(|i| i[0])),
+            opt(self.innovation.map(|i| i[1])),
+            opt(self.nis),
+            u8::from(self.applied).to_string(),
+            format!("{:.6}", self.nees),
+        ];
+        fields.join(",")
+    }
+}
+
+/// Summary of a closed-loop run. Errors are against the true pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Summary {
+    /// Steps simulated.
+    pub steps: usize,
+    /// Simulated time (s).
+    pub sim_time: f64,
+    /// Laps of the square completed.
+    pub laps_completed: usize,
+    /// EKF position RMSE (m).
+    pub ekf_position_rmse: f64,
+    /// EKF heading RMSE (rad, wrapped errors).
+    pub ekf_heading_rmse: f64,
+    /// EKF largest position error (m).
+    pub ekf_max_position_error: f64,
+    /// Odometry-only position RMSE (m).
+    pub odometry_position_rmse: f64,
+    /// Odometry-only heading RMSE (rad).
+    pub odometry_heading_rmse: f64,
+    /// Odometry-only largest position error (m).
+    pub odometry_max_position_error: f64,
+    /// Mean NEES of the EKF (3 dof; 3 for a consistent filter).
+    pub mean_nees: f64,
+    /// Share of steps whose NEES lies in the two-sided 95 % chi-square(3)
+    /// interval (0.95 for a consistent filter).
+    pub nees_in_interval: f64,
+    /// Steps with both IR sensors in range.
+    pub readings: usize,
+    /// Readings associated with a wall (the others were dropped).
+    pub associated: usize,
+    /// Associated readings whose correction passed the gate and was applied.
+    pub corrections: usize,
+    /// Share of associated readings applied (`corrections / associated`; 0
+    /// when nothing was associated).
+    pub acceptance: f64,
+    /// Wall-clock duration of the run (s), including the sink's time. Not
+    /// reproducible.
+    pub wall_clock: f64,
+    /// Simulated time over wall-clock time. Not reproducible.
+    pub real_time_factor: f64,
+}
+
+impl Summary {
+    /// The same summary with the wall-clock fields zeroed, for comparing
+    /// runs.
+    #[must_use]
+    pub fn without_timing(mut self) -> Self {
+        self.wall_clock = 0.0;
+        self.real_time_factor = 0.0;
+        self
+    }
+}
+
+/// NEES `e^T P^-1 e` of `x` against `truth` (heading error wrapped).
+fn nees(x: &Vector3<f64>, p: &Matrix3<f64>, truth: &Pose) -> f64 {
+    let e = Vector3::new(
+        truth.x - x[0],
+        truth.y - x[1],
+        wrap_angle(truth.theta - x[2]),
+    );
+    p.cholesky().map_or(f64::INFINITY, |c| e.dot(&c.solve(&e)))
+}
+
+/// Squared position error and wrapped heading error of `x` against `truth`.
+fn errors(x: &Vector3<f64>, truth: &Pose) -> (f64, f64) {
+    let (dx, dy) = (truth.x - x[0], truth.y - x[1]);
+    (dx * dx + dy * dy, wrap_angle(truth.theta - x[2]))
+}
+
+/// Runs the `square` scenario with `cfg` from `seed`, calling `sink` with
+/// every step's record as the run goes, and returns the summary.
+///
+/// # Errors
+/// [`Error::Config`] for an invalid configuration; a robot, sensor or
+/// filter error stops the run (the records already sunk stay valid).
+#[allow(clippy::cast_precision_loss)]
+pub fn run_square(
+    cfg: &SquareConfig,
+    seed: u64,
+    sink: &mut impl FnMut(&StepRecord),
+) -> Result<Summary, Error> {
+    cfg.validate()?;
+    let started = Instant::now();
+    let mut rng = StdRng::seed_from_u64(seed);
+    let world = World::square_arena();
+
+    // True start drawn from the initial estimate's distribution.
+    let mut draw = |std: f64| -> f64 {
+        let n: f64 = StandardNormal.sample(&mut rng);
+        std * n
+    };
+    let s = cfg.start;
+    let sd = cfg.initial_std;
+    let true_start = Pose::new(s[0] + draw(sd[0]), s[1] + draw(sd[1]), s[2] + draw(sd[2]));
+
+    // Slip bumps over the first lap's wheel travel.
+    let lap_length = 8.0 * locus_control::SQUARE_HALF_SIDE;
+    let mut slip = SlipSchedule::random_bumps(
+        &mut rng,
+        Wheel::Left,
+        (0.0, lap_length),
+        cfg.slip_bumps_per_wheel,
+        cfg.slip_length,
+        cfg.slip_scale,
+    );
+    for z in SlipSchedule::random_bumps(
+        &mut rng,
+        Wheel::Right,
+        (0.0, lap_length),
+        cfg.slip_bumps_per_wheel,
+        cfg.slip_length,
+        cfg.slip_scale,
+    )
+    .zones
+    {
+        slip.push(z);
+    }
+    let mut robot = Robot::new(
+        Kinematics::DifferentialDrive {
+            wheelbase: cfg.wheelbase,
+            wheel_radius: cfg.wheel_radius,
+        },
+        true_start,
+    )
+    .with_slip(slip);
+
+    let wheel = EncoderWheel::new(cfg.encoder_lines, cfg.encoder_gear, cfg.wheel_radius);
+    let mut enc_right = Encoder::new(wheel)?;
+    let mut enc_left = Encoder::new(wheel)?;
+    let (mut last_right, mut last_left) = (enc_right.read(), enc_left.read());
+
+    let pair = IrPair::centred(cfg.ir_spacing);
+    let ir = IrPairSensor::new(pair, SharpIr::assumed(cfg.ir_sigma)?)?;
+
+    let model = DiffDrive::new(cfg.wheelbase, cfg.q11, cfg.q22);
+    let mut ekf = Ekf::<f64>::default();
+    if let Some(c) = cfg.gate_confidence {
+        ekf = ekf.with_gate(ChiSquareGate::new(c)?);
+    }
+    let x0 = Vector3::new(s[0], s[1], s[2]);
+    let p0 = Matrix3::from_diagonal(&Vector3::new(sd[0] * sd[0], sd[1] * sd[1], sd[2] * sd[2]));
+    let mut belief = Belief::new(x0, p0);
+    let mut odo = belief;
+
+    let mut controller = FollowPath::square(cfg.control);
+    let nees_lo = chi2::quantile(0.025, 3)?;
+    let nees_hi = chi2::quantile(0.975, 3)?;
+
+    let max_steps = (cfg.max_time / cfg.dt).ceil() as usize;
+    let mut laps = 0usize;
+    let (mut sq_pos, mut sq_th, mut max_pos) = (0.0, 0.0, 0.0f64);
+    let (mut odo_sq_pos, mut odo_sq_th, mut odo_max_pos) = (0.0, 0.0, 0.0f64);
+    let (mut nees_sum, mut nees_in) = (0.0, 0usize);
+    let (mut readings, mut associated, mut corrections) = (0usize, 0usize, 0usize);
+    let mut steps = 0usize;
+
+    while steps < max_steps {
+        let est = locus_control::Pose::new(belief.x[0], belief.x[1], belief.x[2]);
+        let mut command = controller.command(est);
+        if command.done {
+            laps += 1;
+            if laps >= cfg.laps {
+                break;
+            }
+            controller.reset();
+            command = controller.command(est);
+        }
+        let (v1, v2) = wheel_speeds(command, cfg.wheelbase);
+        let out = robot.step(
+            &Command::Wheels {
+                left: v2,
+                right: v1,
+            },
+            cfg.dt,
+        )?;
+
+        // Encoders -> wrapping count differences -> wheel travels.
+        enc_right.advance(
+            out.measured_travel.right * (1.0 + cfg.right_scale_error),
+            &mut rng,
+        )?;
+        enc_left.advance(out.measured_travel.left, &mut rng)?;
+        let (now_right, now_left) = (enc_right.read(), enc_left.read());
+        let u = WheelTravel {
+            d1: wheel.distance(wrapping_diff(now_right, last_right, COUNTER_BITS)),
+            d2: wheel.distance(wrapping_diff(now_left, last_left, COUNTER_BITS)),
+        };
+        (last_right, last_left) = (now_right, now_left);
+
+        belief = ekf.predict(&belief, &model, &u)?;
+        odo = ekf.predict(&odo, &model, &u)?;
+
+        let truth = out.pose;
+        let reading = ir.read(&world.walls, [truth.x, truth.y, truth.theta], &mut rng)?;
+        let (mut innovation, mut nis, mut applied) = (None, None, false);
+        if let Some((ds1, ds2)) = reading {
+            readings += 1;
+            if let Some(wall) =
+                associate_ir_wall(&belief.x, &pair, &world.walls, cfg.association_range)
+            {
+                associated += 1;
+                let obs = IrPairObservation {
+                    pair,
+                    wall,
+                    ds1,
+                    ds2,
+                    r11: cfg.r11,
+                    r22: cfg.r22,
+                };
+                let c = ekf.correct(&belief, &obs, &obs.z())?;
+                innovation = Some([c.innovation[0], c.innovation[1]]);
+                nis = Some(c.nis);
+                applied = c.applied;
+                if c.applied {
+                    corrections += 1;
+                }
+                belief = c.belief;
+            }
+        }
+
+        let n = nees(&belief.x, &belief.p, &truth);
+        nees_sum += n;
+        if (nees_lo..=nees_hi).contains(&n) {
+            nees_in += 1;
+        }
+        let (e2, eth) = errors(&belief.x, &truth);
+        sq_pos += e2;
+        sq_th += eth * eth;
+        max_pos = max_pos.max(e2.sqrt());
+        let (o2, oth) = errors(&odo.x, &truth);
+        odo_sq_pos += o2;
+        odo_sq_th += oth * oth;
+        odo_max_pos = odo_max_pos.max(o2.sqrt());
+
+        steps += 1;
+        let p = &belief.p;
+        sink(&StepRecord {
+            step: steps - 1,
+            time: steps as f64 * cfg.dt,
+            truth,
+            ekf: [belief.x[0], belief.x[1], belief.x[2]],
+            ekf_p: [p[(0, 0)], p[(1, 1)], p[(2, 2)], p[(0, 1)]],
+            odometry: [odo.x[0], odo.x[1], odo.x[2]],
+            wheel_travel: [u.d1, u.d2],
+            ir: reading,
+            innovation,
+            nis,
+            applied,
+            nees: n,
+        });
+    }
+
+    let n = steps.max(1) as f64;
+    let sim_time = steps as f64 * cfg.dt;
+    let wall_clock = started.elapsed().as_secs_f64();
+    Ok(Summary {
+        steps,
+        sim_time,
+        laps_completed: laps,
+        ekf_position_rmse: (sq_pos / n).sqrt(),
+        ekf_heading_rmse: (sq_th / n).sqrt(),
+        ekf_max_position_error: max_pos,
+        odometry_position_rmse: (odo_sq_pos / n).sqrt(),
+        odometry_heading_rmse: (odo_sq_th / n).sqrt(),
+        odometry_max_position_error: odo_max_pos,
+        mean_nees: nees_sum / n,
+        nees_in_interval: nees_in as f64 / n,
+        readings,
+        associated,
+        corrections,
+        acceptance: if associated > 0 {
+            corrections as f64 / associated as f64
+        } else {
+            0.0
+        },
+        wall_clock,
+        real_time_factor: if wall_clock > 0.0 {
+            sim_time / wall_clock
+        } else {
+            f64::INFINITY
+        },
+    })
+}
