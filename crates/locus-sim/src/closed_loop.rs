@@ -19,14 +19,31 @@
 //!    are in range the estimate picks the wall (or drops the reading) and the
 //!    EKF corrects (99 % chi-square gate by default).
 //!
+//! # The `square-ideal` scenario ([`NoiseModel::Ideal`])
+//! The same loop with the simulated noise exactly as the filter assumes, for
+//! checking the filter's consistency (NEES): no slip, no encoder
+//! quantisation, no calibration error. Step 2-3 become: the odometry input
+//! `u` is the commanded wheel travel (`V_i dt`), and the truth moves with the
+//! filter's own discrete model, `X_true' = f(X_true, u, q)` ([`DiffDrive`])
+//! with `q ~ N(0, diag(Q11, Q22))`, while the filter predicts with
+//! `f(X, u, 0)`. Step 5 becomes: the noise-free readings of the IR pair are
+//! cast on the true walls; when both are in the sensor's useful range and
+//! see the wall the truth's IR pair points at (found by data association
+//! on the true pose, so the association is always right), the observation is
+//! `z = h(X_true) + V n` with `n ~ N(0, diag(R11, R22))` and `V` evaluated at
+//! the noise-free readings, and the filter uses that same `V` (its
+//! `V R V^T` is the exact covariance of `z`). Heading components are
+//! wrapped. The record's `ir` field then holds the noise-free readings plus
+//! `n`.
+//!
 //! All randomness comes from one `StdRng` seeded with the run's seed, so a
 //! run is reproducible from `(config, seed)` (wall-clock timing aside).
 
 use std::time::Instant;
 
 use locus_control::{Controller, FollowPath, wheel_speeds};
-use locus_core::nalgebra::{Matrix3, Vector3};
-use locus_core::{Belief, ChiSquareGate, Ekf, chi2, wrap_angle};
+use locus_core::nalgebra::{Matrix3, Vector2, Vector3};
+use locus_core::{Belief, ChiSquareGate, Ekf, MeasurementModel, MotionModel, chi2, wrap_angle};
 use locus_models::{DiffDrive, IrPair, IrPairObservation, WheelTravel, associate_ir_wall};
 use locus_odometry::{Wheel as EncoderWheel, wrapping_diff};
 use rand::SeedableRng;
@@ -57,6 +74,19 @@ pub enum Error {
     /// The filter failed (non-finite values, S not positive definite, ...).
     #[error("filter: {0}")]
     Filter(#[from] locus_core::Error),
+}
+
+/// How the simulated noise is generated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum NoiseModel {
+    /// The `square` scenario: exact-arc robot with slip bumps, quantised
+    /// encoders with a calibration error, IR readings through the sensor
+    /// curve.
+    #[default]
+    Realistic,
+    /// The `square-ideal` scenario: noise exactly as the filter's `Q` and
+    /// `R` assume (see the [module documentation](self)).
+    Ideal,
 }
 
 /// Configuration of the `square` scenario. Every value is SI (m, s, rad);
@@ -122,6 +152,9 @@ pub struct SquareConfig {
     pub gate_confidence: Option<f64>,
     /// Path controller parameters (`V_ref` 0.1 m/s, ...).
     pub control: locus_control::Config,
+    /// How the simulated noise is generated. Default
+    /// [`NoiseModel::Realistic`].
+    pub noise: NoiseModel,
 }
 
 impl Default for SquareConfig {
@@ -153,11 +186,27 @@ impl Default for SquareConfig {
             r22: 0.005 * 0.005,
             gate_confidence: Some(0.99),
             control: locus_control::Config::default(),
+            noise: NoiseModel::Realistic,
         }
     }
 }
 
 impl SquareConfig {
+    /// The `square-ideal` scenario: the default configuration with
+    /// [`NoiseModel::Ideal`] (simulated noise exactly as the filter's `Q` and
+    /// `R` assume: no slip, no quantisation, no calibration error) and no
+    /// gate (`gate_confidence: None`), so every associated reading is
+    /// applied and the NEES is the filter's own. The slip, encoder and
+    /// calibration fields are ignored in this mode.
+    #[must_use]
+    pub fn ideal() -> Self {
+        Self {
+            noise: NoiseModel::Ideal,
+            gate_confidence: None,
+            ..Self::default()
+        }
+    }
+
     /// `Ok(())` if every value is in its domain.
     ///
     /// # Errors
@@ -369,10 +418,64 @@ fn nees(x: &Vector3<f64>, p: &Matrix3<f64>, truth: &Pose) -> f64 {
     p.cholesky().map_or(f64::INFINITY, |c| e.dot(&c.solve(&e)))
 }
 
+/// A draw from `N(0, std^2)`.
+fn gauss(rng: &mut StdRng, std: f64) -> f64 {
+    let n: f64 = StandardNormal.sample(rng);
+    std * n
+}
+
 /// Squared position error and wrapped heading error of `x` against `truth`.
 fn errors(x: &Vector3<f64>, truth: &Pose) -> (f64, f64) {
     let (dx, dy) = (truth.x - x[0], truth.y - x[1]);
     (dx * dx + dy * dy, wrap_angle(truth.theta - x[2]))
+}
+
+/// An ideal-mode observation and its `z` (m, rad).
+type IdealObservation = (IrPairObservation<f64>, Vector2<f64>);
+
+/// The ideal-mode observation at the true state `true_x` with reading noise
+/// `noise` (m): `None` unless both noise-free readings are in the sensor's
+/// useful range and both beams see the wall the data association on the
+/// true pose returns; otherwise the observation (noise-free readings, the
+/// true wall, `R` of `cfg`) and `z = h(X_true) + V n`, heading wrapped.
+fn ideal_observation(
+    cfg: &SquareConfig,
+    ir: &IrPairSensor,
+    world: &World,
+    true_x: &Vector3<f64>,
+    noise: &Vector2<f64>,
+) -> Result<Option<IdealObservation>, Error> {
+    let (t1, t2) = ir.true_distances(&world.walls, [true_x[0], true_x[1], true_x[2]])?;
+    let in_range =
+        |t: Option<f64>, s: &SharpIr| t.filter(|d| (s.min_range..=s.max_range).contains(d));
+    let (Some(ds1), Some(ds2)) = (in_range(t1, &ir.front), in_range(t2, &ir.rear)) else {
+        return Ok(None);
+    };
+    let Some(wall) = associate_ir_wall(true_x, &ir.pair, &world.walls, cfg.association_range)
+    else {
+        return Ok(None);
+    };
+    let obs = IrPairObservation {
+        pair: ir.pair,
+        wall,
+        ds1,
+        ds2,
+        r11: cfg.r11,
+        r22: cfg.r22,
+    };
+    let Some(h) = obs.h(true_x) else {
+        return Ok(None);
+    };
+    // Both beams on that wall: the noise-free readings give exactly h.
+    let r = obs.residual(&obs.z(), &h);
+    if r[0].abs() > 1e-9 || r[1].abs() > 1e-9 {
+        return Ok(None);
+    }
+    let e = obs.v() * noise;
+    Ok(Some((
+        obs,
+        Vector2::new(h[0] + e[0], wrap_angle(h[1] + e[1])),
+    )))
 }
 
 /// Runs the `square` scenario with `cfg` from `seed`, calling `sink` with
@@ -381,7 +484,7 @@ fn errors(x: &Vector3<f64>, truth: &Pose) -> (f64, f64) {
 /// # Errors
 /// [`Error::Config`] for an invalid configuration; a robot, sensor or
 /// filter error stops the run (the records already sunk stay valid).
-#[allow(clippy::cast_precision_loss)]
+#[allow(clippy::cast_precision_loss, clippy::too_many_lines)]
 pub fn run_square(
     cfg: &SquareConfig,
     seed: u64,
@@ -450,6 +553,10 @@ pub fn run_square(
     let mut belief = Belief::new(x0, p0);
     let mut odo = belief;
 
+    let ideal = cfg.noise == NoiseModel::Ideal;
+    let mut true_x = Vector3::new(true_start.x, true_start.y, true_start.theta);
+    let q_std = [cfg.q11.sqrt(), cfg.q22.sqrt()];
+
     let mut controller = FollowPath::square(cfg.control);
     let nees_lo = chi2::quantile(0.025, 3)?;
     let nees_hi = chi2::quantile(0.975, 3)?;
@@ -474,34 +581,66 @@ pub fn run_square(
             command = controller.command(est);
         }
         let (v1, v2) = wheel_speeds(command, cfg.wheelbase);
-        let out = robot.step(
-            &Command::Wheels {
-                left: v2,
-                right: v1,
-            },
-            cfg.dt,
-        )?;
+        let (truth, u) = if ideal {
+            // The truth moves with the filter's model and noise.
+            let u = WheelTravel {
+                d1: v1 * cfg.dt,
+                d2: v2 * cfg.dt,
+            };
+            let q = Vector2::new(gauss(&mut rng, q_std[0]), gauss(&mut rng, q_std[1]));
+            true_x = model.f(&true_x, &u, &q);
+            (Pose::new(true_x[0], true_x[1], true_x[2]), u)
+        } else {
+            let out = robot.step(
+                &Command::Wheels {
+                    left: v2,
+                    right: v1,
+                },
+                cfg.dt,
+            )?;
 
-        // Encoders -> wrapping count differences -> wheel travels.
-        enc_right.advance(
-            out.measured_travel.right * (1.0 + cfg.right_scale_error),
-            &mut rng,
-        )?;
-        enc_left.advance(out.measured_travel.left, &mut rng)?;
-        let (now_right, now_left) = (enc_right.read(), enc_left.read());
-        let u = WheelTravel {
-            d1: wheel.distance(wrapping_diff(now_right, last_right, COUNTER_BITS)),
-            d2: wheel.distance(wrapping_diff(now_left, last_left, COUNTER_BITS)),
+            // Encoders -> wrapping count differences -> wheel travels.
+            enc_right.advance(
+                out.measured_travel.right * (1.0 + cfg.right_scale_error),
+                &mut rng,
+            )?;
+            enc_left.advance(out.measured_travel.left, &mut rng)?;
+            let (now_right, now_left) = (enc_right.read(), enc_left.read());
+            let u = WheelTravel {
+                d1: wheel.distance(wrapping_diff(now_right, last_right, COUNTER_BITS)),
+                d2: wheel.distance(wrapping_diff(now_left, last_left, COUNTER_BITS)),
+            };
+            (last_right, last_left) = (now_right, now_left);
+            (out.pose, u)
         };
-        (last_right, last_left) = (now_right, now_left);
 
         belief = ekf.predict(&belief, &model, &u)?;
         odo = ekf.predict(&odo, &model, &u)?;
 
-        let truth = out.pose;
-        let reading = ir.read(&world.walls, [truth.x, truth.y, truth.theta], &mut rng)?;
         let (mut innovation, mut nis, mut applied) = (None, None, false);
-        if let Some((ds1, ds2)) = reading {
+        let reading = if ideal {
+            let r_std = [cfg.r11.sqrt(), cfg.r22.sqrt()];
+            let noise = Vector2::new(gauss(&mut rng, r_std[0]), gauss(&mut rng, r_std[1]));
+            let ideal_obs = ideal_observation(cfg, &ir, &world, &true_x, &noise)?;
+            if let Some((obs, z)) = ideal_obs {
+                readings += 1;
+                associated += 1;
+                let c = ekf.correct(&belief, &obs, &z)?;
+                innovation = Some([c.innovation[0], c.innovation[1]]);
+                nis = Some(c.nis);
+                applied = c.applied;
+                if c.applied {
+                    corrections += 1;
+                }
+                belief = c.belief;
+                Some((obs.ds1 + noise[0], obs.ds2 + noise[1]))
+            } else {
+                None
+            }
+        } else {
+            ir.read(&world.walls, [truth.x, truth.y, truth.theta], &mut rng)?
+        };
+        if let (false, Some((ds1, ds2))) = (ideal, reading) {
             readings += 1;
             if let Some(wall) =
                 associate_ir_wall(&belief.x, &pair, &world.walls, cfg.association_range)

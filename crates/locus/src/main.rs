@@ -26,7 +26,9 @@ enum Command {
     Demo(demo::DemoArgs),
     /// Run a closed-loop scenario of the simulator (controller, encoders, IR
     /// pair, EKF against odometry alone): prints a summary table and writes
-    /// `log.csv` (as the run goes) and `metrics.json`.
+    /// `log.csv` (as the run goes) and `metrics.json`; with `--runs N`, a
+    /// Monte Carlo over N seeds in parallel (table, `runs.csv`,
+    /// `metrics.json`, no step log).
     Run(run::RunArgs),
 }
 

@@ -105,3 +105,150 @@ fn run_with_an_unknown_scenario_names_the_supported_ones() {
     assert!(stderr.contains("no-such-scenario"), "{stderr}");
     assert!(stderr.contains("supported scenarios: square"), "{stderr}");
 }
+
+/// A fresh, empty temporary directory for one test.
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("locus-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// Issue 5: a run killed with SIGKILL leaves a readable `log.csv` prefix
+/// (header, complete rectangular numeric lines, increasing time, at most a
+/// partial last line).
+#[test]
+fn a_killed_run_leaves_a_readable_log_prefix() {
+    use core::time::Duration;
+    use std::time::Instant;
+
+    let dir = temp_dir("killed-run");
+    let log = dir.join("log.csv");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_locus"))
+        .args(["run", "--laps", "50", "--out"])
+        .arg(&dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("start locus");
+    let started = Instant::now();
+    loop {
+        let lines = std::fs::read(&log).map_or(0, |b| b.iter().filter(|&&c| c == b'\n').count());
+        if lines > 500 {
+            break;
+        }
+        if let Some(status) = child.try_wait().expect("poll locus") {
+            panic!("locus ended ({status}) before the log grew: {lines} lines");
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(60),
+            "log.csv had {lines} lines after 60 s"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().expect("SIGKILL locus");
+    let status = child.wait().expect("reap locus");
+    assert!(!status.success(), "a 50-lap run cannot finish this fast");
+
+    let bytes = std::fs::read(&log).expect("log.csv");
+    let text = String::from_utf8_lossy(&bytes);
+    let mut lines: Vec<&str> = text.split('\n').collect();
+    // The text after the last newline is the partial line (empty if none):
+    // only the last line may lack its newline.
+    let partial = lines.pop().expect("split yields at least one piece");
+    let header = lines.first().expect("header");
+    let columns: Vec<&str> = header.split(',').collect();
+    assert!(columns.len() > 10, "{header}");
+    let time_col = columns
+        .iter()
+        .position(|c| c.starts_with("time"))
+        .expect("time column");
+    assert!(lines.len() > 500, "{} complete lines", lines.len());
+    let mut last_time = f64::NEG_INFINITY;
+    for (i, line) in lines.iter().enumerate().skip(1) {
+        let fields: Vec<&str> = line.split(',').collect();
+        assert_eq!(fields.len(), columns.len(), "line {}: {line}", i + 1);
+        for (c, field) in fields.iter().enumerate() {
+            assert!(
+                field.is_empty() || field.parse::<f64>().is_ok_and(f64::is_finite),
+                "line {}, column {}: `{field}`",
+                i + 1,
+                columns[c]
+            );
+        }
+        for required in [0, time_col] {
+            assert!(!fields[required].is_empty(), "line {}: {line}", i + 1);
+        }
+        let time: f64 = fields[time_col].parse().expect("time");
+        assert!(
+            time > last_time,
+            "line {}: time {time} after {last_time}",
+            i + 1
+        );
+        last_time = time;
+    }
+    // A partial line is a prefix of a row: never more columns than a row.
+    assert!(
+        partial.split(',').count() <= columns.len(),
+        "partial line: {partial}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 5: `--runs 4` prints the Monte Carlo table and writes `runs.csv`
+/// with one row per seed and an aggregate `metrics.json`.
+#[test]
+fn run_monte_carlo_prints_the_table_and_writes_runs_csv() {
+    let dir = temp_dir("monte-carlo");
+    let out = locus(&[
+        "run",
+        "--runs",
+        "4",
+        "--seed",
+        "7",
+        "--laps",
+        "1",
+        "--out",
+        dir.to_str().expect("utf-8 temp dir"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    for needle in [
+        "Monte Carlo over 4 runs",
+        "mean",
+        "std (n-1)",
+        "EKF position RMSE [cm]",
+        "odometry position RMSE [cm]",
+        "EKF heading RMSE [deg]",
+        "mean NEES",
+        "updates accepted by the gate [%]",
+    ] {
+        assert!(stdout.contains(needle), "{needle} missing:\n{stdout}");
+    }
+    assert!(!dir.join("log.csv").exists(), "no step log with --runs > 1");
+    let csv = std::fs::read_to_string(dir.join("runs.csv")).expect("runs.csv");
+    let mut lines = csv.lines();
+    let header = lines.next().expect("header");
+    let columns = header.split(',').count();
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 4, "{csv}");
+    let mut seeds: Vec<u64> = rows
+        .iter()
+        .map(|r| {
+            assert_eq!(r.split(',').count(), columns, "{r}");
+            r.split(',').next().unwrap().parse().expect("seed")
+        })
+        .collect();
+    seeds.sort_unstable();
+    assert_eq!(seeds, [7, 8, 9, 10]);
+    let metrics = std::fs::read_to_string(dir.join("metrics.json")).expect("metrics.json");
+    assert!(metrics.contains("\"runs\": 4"), "{metrics}");
+    assert!(
+        metrics.contains("\"ekf_position_rmse_m\": { \"mean\""),
+        "{metrics}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
