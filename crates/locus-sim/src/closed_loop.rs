@@ -618,34 +618,22 @@ pub fn run_square(
         odo = ekf.predict(&odo, &model, &u)?;
 
         let (mut innovation, mut nis, mut applied) = (None, None, false);
-        let reading = if ideal {
+        // The raw readings (for the log) and, if associated, the observation.
+        let (reading, observation) = if ideal {
             let r_std = [cfg.r11.sqrt(), cfg.r22.sqrt()];
             let noise = Vector2::new(gauss(&mut rng, r_std[0]), gauss(&mut rng, r_std[1]));
-            let ideal_obs = ideal_observation(cfg, &ir, &world, &true_x, &noise)?;
-            if let Some((obs, z)) = ideal_obs {
-                readings += 1;
-                associated += 1;
-                let c = ekf.correct(&belief, &obs, &z)?;
-                innovation = Some([c.innovation[0], c.innovation[1]]);
-                nis = Some(c.nis);
-                applied = c.applied;
-                if c.applied {
-                    corrections += 1;
-                }
-                belief = c.belief;
-                Some((obs.ds1 + noise[0], obs.ds2 + noise[1]))
-            } else {
-                None
+            match ideal_observation(cfg, &ir, &world, &true_x, &noise)? {
+                Some((obs, z)) => (
+                    Some((obs.ds1 + noise[0], obs.ds2 + noise[1])),
+                    Some((obs, z)),
+                ),
+                None => (None, None),
             }
         } else {
-            ir.read(&world.walls, [truth.x, truth.y, truth.theta], &mut rng)?
-        };
-        if let (false, Some((ds1, ds2))) = (ideal, reading) {
-            readings += 1;
-            if let Some(wall) =
-                associate_ir_wall(&belief.x, &pair, &world.walls, cfg.association_range)
-            {
-                associated += 1;
+            let reading = ir.read(&world.walls, [truth.x, truth.y, truth.theta], &mut rng)?;
+            let observation = reading.and_then(|(ds1, ds2)| {
+                let wall =
+                    associate_ir_wall(&belief.x, &pair, &world.walls, cfg.association_range)?;
                 let obs = IrPairObservation {
                     pair,
                     wall,
@@ -654,15 +642,19 @@ pub fn run_square(
                     r11: cfg.r11,
                     r22: cfg.r22,
                 };
-                let c = ekf.correct(&belief, &obs, &obs.z())?;
-                innovation = Some([c.innovation[0], c.innovation[1]]);
-                nis = Some(c.nis);
-                applied = c.applied;
-                if c.applied {
-                    corrections += 1;
-                }
-                belief = c.belief;
-            }
+                Some((obs, obs.z()))
+            });
+            (reading, observation)
+        };
+        readings += usize::from(reading.is_some());
+        if let Some((obs, z)) = observation {
+            associated += 1;
+            let c = ekf.correct(&belief, &obs, &z)?;
+            innovation = Some([c.innovation[0], c.innovation[1]]);
+            nis = Some(c.nis);
+            applied = c.applied;
+            corrections += usize::from(c.applied);
+            belief = c.belief;
         }
 
         let n = nees(&belief.x, &belief.p, &truth);
