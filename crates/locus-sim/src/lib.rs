@@ -11,6 +11,7 @@
 
 pub mod closed_loop;
 pub mod robot;
+pub mod scenario;
 pub mod sensors;
 pub mod world;
 
