@@ -13,6 +13,7 @@ pub mod closed_loop;
 pub mod robot;
 pub mod scenario;
 pub mod sensors;
+pub mod wall45;
 pub mod world;
 
 pub use closed_loop::{SquareConfig, StepRecord, Summary, run_square};
