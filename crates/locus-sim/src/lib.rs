@@ -13,6 +13,7 @@ pub mod closed_loop;
 pub mod robot;
 pub mod scenario;
 pub mod sensors;
+pub mod tricycle_slip;
 pub mod wall45;
 pub mod world;
 
