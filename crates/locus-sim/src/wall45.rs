@@ -58,7 +58,7 @@
 
 use locus_core::nalgebra::{Matrix3, SVector, Vector1, Vector2, Vector3};
 use locus_core::{Belief, ChiSquareGate, Ekf, MeasurementModel, MotionModel, wrap_angle};
-use locus_models::laser_wall::{LaserMount, LaserRange, LaserWallPaper, WallLine};
+use locus_models::laser_wall::{BeamLimits, LaserMount, LaserRange, LaserWallPaper, WallLine};
 use locus_models::skid_steer::{SkidSteer, TreadSpeeds};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
@@ -212,7 +212,10 @@ impl Wall45Config {
             (pos(self.dt), "dt must be finite and > 0"),
             (pos(self.speed), "speed must be finite and > 0"),
             (pos(self.turn_rate), "turn_rate must be finite and > 0"),
-            (non_neg(self.dwell), "dwell must be finite and >= 0"),
+            (
+                non_neg(self.dwell) && self.dwell >= 0.5 * self.dt,
+                "dwell must be finite and >= dt / 2 (one step at rest per instant)",
+            ),
             (self.wall_a.is_finite(), "wall_a must be finite"),
             (pos(self.track), "track must be finite and > 0"),
             (
@@ -542,8 +545,15 @@ pub fn run_wall45(
             let r_noise = [gauss(&mut rng, sigma), gauss(&mut rng, sigma)];
             let pose = [true_x[0], true_x[1], true_x[2]];
             let measured = laser.read(&world.walls, pose, &mut rng)?[0];
-            let paper = LaserWallPaper::new(mount, wall_line, var(sigma), var(sigma));
-            let exact = LaserRange::new(mount, &world.walls, var(sigma));
+            let limits = BeamLimits::with_max_range(cfg.max_range);
+            let paper = LaserWallPaper {
+                limits,
+                ..LaserWallPaper::new(mount, wall_line, var(sigma), var(sigma))
+            };
+            let exact = LaserRange {
+                limits,
+                ..LaserRange::new(mount, &world.walls, var(sigma))
+            };
             let mut correction = None;
             let mut innovation = None;
             let mut range = None;

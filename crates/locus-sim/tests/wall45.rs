@@ -61,6 +61,12 @@ fn invalid_configuration_names_the_field() {
     };
     let err = run_wall45(&cfg, 0, &mut |_: &Wall45Record| {}).expect_err("invalid");
     assert!(err.to_string().contains("laser_sigma_moving"), "{err}");
+    let cfg = Wall45Config {
+        dwell: 0.0,
+        ..Wall45Config::default()
+    };
+    let err = run_wall45(&cfg, 0, &mut |_: &Wall45Record| {}).expect_err("no dwell");
+    assert!(err.to_string().contains("dwell"), "{err}");
     let err = toml::from_str::<Wall45Config>("speed = 0.1\nsped = 2.0\n").expect_err("unknown");
     assert!(err.to_string().contains("sped"), "{err}");
     let cfg: Wall45Config = toml::from_str("model = \"exact\"\ndt = 0.05\n").expect("parse");
