@@ -52,11 +52,43 @@ impl<T: Scalar, const N: usize> Belief<T, N> {
 
 /// True if every value is finite (no NaN, no infinity).
 ///
-/// Branch-free and without a serial dependency chain: `v * 0` is (+-)0 for a
-/// finite `v` and NaN for NaN or an infinity, and the comparisons are
-/// combined with a non-short-circuiting `&`.
+/// Branch-free, with one comparison: `v * 0` is (+-)0 for a finite `v` and
+/// NaN for NaN or an infinity, so the sum of the `v * 0` is zero exactly when
+/// every value is finite (a sum of zeros cannot overflow). Four interleaved
+/// partial sums keep the dependency chains short.
 #[inline(always)]
 pub(crate) fn all_finite<T: Scalar>(values: &[T]) -> bool {
     let zero = T::zero();
-    values.iter().fold(true, |ok, v| ok & (*v * zero == zero))
+    let mut acc = [zero; 4];
+    for (i, v) in values.iter().enumerate() {
+        acc[i % 4] += *v * zero;
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) == zero
+}
+
+/// [`all_finite`] of two slices with one comparison and no branch between
+/// them (the filter checks a state and its covariance together).
+#[inline(always)]
+pub(crate) fn all_finite_pair<T: Scalar>(a: &[T], b: &[T]) -> bool {
+    nonfinite_marker(a) + nonfinite_marker(b) == T::zero()
+}
+
+/// Zero if every value is finite, NaN otherwise (see [`all_finite`]).
+#[inline(always)]
+fn nonfinite_marker<T: Scalar>(values: &[T]) -> T {
+    let zero = T::zero();
+    let mut acc = [zero; 4];
+    for (i, v) in values.iter().enumerate() {
+        acc[i % 4] += *v * zero;
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3])
+}
+
+/// True if `v` is finite, with floating-point operations only (`v * 0` is
+/// (+-)0 unless `v` is NaN or infinite). `is_finite` inspects the bits, which
+/// moves the value to an integer register and back on the filter's critical
+/// path.
+#[inline(always)]
+pub(crate) fn finite<T: Scalar>(v: T) -> bool {
+    v * T::zero() == T::zero()
 }

@@ -167,3 +167,80 @@ where
     compare("H", &model.jacobian(x), &num, tol)?;
     Ok(true)
 }
+
+/// Checks a motion model's [`MotionModel::propagate`] against the dense
+/// `(f(x, u, 0), A P A^T + W Q W^T)` of its `f`, `A`, `W` and `Q`; `tol` is
+/// relative to the largest entry of each reference. Also checks that the
+/// covariance is exactly symmetric.
+pub fn check_propagate<T, Mo, const N: usize, const NQ: usize>(
+    model: &Mo,
+    x: &SVector<T, N>,
+    u: &Mo::Input,
+    p: &SMatrix<T, N, N>,
+    tol: T,
+) -> Result<(), Mismatch<T>>
+where
+    T: Scalar,
+    Mo: MotionModel<T, N, NQ>,
+{
+    let (xp, pp) = model.propagate(x, u, p);
+    let f0 = model.f(x, u, &SVector::<T, NQ>::zeros());
+    let a = model.jacobian_state(x, u);
+    let w = model.jacobian_noise(x, u);
+    let dense = a * p * a.transpose() + w * model.noise_cov(u) * w.transpose();
+    compare_scaled("propagate x", &xp, &f0, tol)?;
+    compare_scaled("propagate P", &pp, &dense, tol)?;
+    compare("propagate P symmetric", &pp, &pp.transpose(), T::zero())
+}
+
+/// Checks a measurement model's [`MeasurementModel::project`] against the
+/// dense `(P H^T, H P H^T)` of its `H`; `tol` relative to the largest entry
+/// of each reference. Skips (returns `Ok(false)`) where `h(x)` is `None`.
+pub fn check_project<T, Me, const N: usize, const M: usize>(
+    model: &Me,
+    x: &SVector<T, N>,
+    p: &SMatrix<T, N, N>,
+    tol: T,
+) -> Result<bool, Mismatch<T>>
+where
+    T: Scalar,
+    Me: MeasurementModel<T, N, M>,
+{
+    if model.h(x).is_none() {
+        return Ok(false);
+    }
+    let h = model.jacobian(x);
+    let (pht, hph) = model.project(x, p);
+    compare_scaled("project P H^T", &pht, &(p * h.transpose()), tol)?;
+    compare_scaled("project H P H^T", &hph, &(h * p * h.transpose()), tol)?;
+    Ok(true)
+}
+
+/// Entry-by-entry comparison with the tolerance scaled by the reference's
+/// largest entry (so a zero reference needs an exact match); `analytic` in
+/// the mismatch is the model's override, `numeric` the dense reference.
+fn compare_scaled<T: Scalar, const R: usize, const C: usize>(
+    what: &'static str,
+    got: &SMatrix<T, R, C>,
+    reference: &SMatrix<T, R, C>,
+    tol: T,
+) -> Result<(), Mismatch<T>> {
+    let scale = reference.iter().fold(T::zero(), |m, v| m.max(v.abs()));
+    for col in 0..C {
+        for row in 0..R {
+            let (g, r) = (got[(row, col)], reference[(row, col)]);
+            // Written as a positive test so that NaN fails it.
+            let within = (g - r).abs() <= tol * scale;
+            if !within {
+                return Err(Mismatch {
+                    jacobian: what,
+                    row,
+                    col,
+                    analytic: g,
+                    numeric: r,
+                });
+            }
+        }
+    }
+    Ok(())
+}

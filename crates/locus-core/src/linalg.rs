@@ -9,8 +9,14 @@
 use nalgebra::SMatrix;
 
 use crate::Scalar;
+use crate::belief::finite;
 
 /// `A B`.
+///
+/// Column-oriented (`out[:, j] += A[:, k] B[k, j]`, `k` ascending): each
+/// term is the same scalar sum as the dot-product form, in the same order,
+/// but the innermost loop runs down a contiguous column, which LLVM packs
+/// into SIMD multiply-adds the way nalgebra's own small-matrix product does.
 #[inline(always)]
 pub(crate) fn mul<T: Scalar, const R: usize, const K: usize, const C: usize>(
     a: &SMatrix<T, R, K>,
@@ -18,18 +24,17 @@ pub(crate) fn mul<T: Scalar, const R: usize, const K: usize, const C: usize>(
 ) -> SMatrix<T, R, C> {
     let mut out = SMatrix::<T, R, C>::zeros();
     for j in 0..C {
-        for i in 0..R {
-            let mut acc = T::zero();
-            for k in 0..K {
-                acc += a[(i, k)] * b[(k, j)];
+        for k in 0..K {
+            let bkj = b[(k, j)];
+            for i in 0..R {
+                out[(i, j)] += a[(i, k)] * bkj;
             }
-            out[(i, j)] = acc;
         }
     }
     out
 }
 
-/// `A B^T`.
+/// `A B^T` (column-oriented like [`mul`]).
 #[inline(always)]
 pub(crate) fn mul_bt<T: Scalar, const R: usize, const K: usize, const C: usize>(
     a: &SMatrix<T, R, K>,
@@ -37,34 +42,28 @@ pub(crate) fn mul_bt<T: Scalar, const R: usize, const K: usize, const C: usize>(
 ) -> SMatrix<T, R, C> {
     let mut out = SMatrix::<T, R, C>::zeros();
     for j in 0..C {
-        for i in 0..R {
-            let mut acc = T::zero();
-            for k in 0..K {
-                acc += a[(i, k)] * b[(j, k)];
+        for k in 0..K {
+            let bjk = b[(j, k)];
+            for i in 0..R {
+                out[(i, j)] += a[(i, k)] * bjk;
             }
-            out[(i, j)] = acc;
         }
     }
     out
 }
 
-/// `A M A^T` for a symmetric `M`, computed on the upper triangle and mirrored
-/// (exactly symmetric).
+/// `A M A^T` for a symmetric `M`: the full product (vectorised as in
+/// [`mul`]), then the upper triangle mirrored onto the lower, so the result is
+/// exactly symmetric.
 #[inline(always)]
 pub(crate) fn sandwich<T: Scalar, const R: usize, const K: usize>(
     a: &SMatrix<T, R, K>,
     m: &SMatrix<T, K, K>,
 ) -> SMatrix<T, R, R> {
-    let am = mul(a, m);
-    let mut out = SMatrix::<T, R, R>::zeros();
-    for i in 0..R {
-        for j in i..R {
-            let mut acc = T::zero();
-            for k in 0..K {
-                acc += am[(i, k)] * a[(j, k)];
-            }
-            out[(i, j)] = acc;
-            out[(j, i)] = acc;
+    let mut out = mul_bt(&mul(a, m), a);
+    for j in 0..R {
+        for i in (j + 1)..R {
+            out[(i, j)] = out[(j, i)];
         }
     }
     out
@@ -83,12 +82,12 @@ pub(crate) fn spd_inverse<T: Scalar, const M: usize>(
         1 => {
             let d = s[(0, 0)];
             // `>` is false for NaN.
-            (d > zero && d.is_finite()).then(|| SMatrix::from_element(T::one() / d))
+            (d > zero && finite(d)).then(|| SMatrix::from_element(T::one() / d))
         }
         2 => {
             let (a, b, c, d) = (s[(0, 0)], s[(0, 1)], s[(1, 0)], s[(1, 1)]);
             let det = a * d - b * c;
-            if !(a > zero && det > zero && det.is_finite()) {
+            if !(a > zero && det > zero && finite(det)) {
                 return None;
             }
             let inv_det = T::one() / det;
@@ -114,7 +113,7 @@ fn ldlt_inverse<T: Scalar, const M: usize>(s: &SMatrix<T, M, M>) -> Option<SMatr
         for k in 0..j {
             dj -= l[(j, k)] * l[(j, k)] * d[k];
         }
-        if !(dj > zero && dj.is_finite()) {
+        if !(dj > zero && finite(dj)) {
             return None;
         }
         d[j] = dj;

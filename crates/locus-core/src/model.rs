@@ -11,6 +11,7 @@
 use nalgebra::{SMatrix, SVector};
 
 use crate::Scalar;
+use crate::linalg::{mul, mul_bt, sandwich};
 
 /// A discrete-time motion model `X' = f(X, u, q)` with process noise
 /// `q ~ N(0, Q)` of dimension `NQ`.
@@ -66,6 +67,26 @@ pub trait MotionModel<T: Scalar, const N: usize, const NQ: usize> {
         )
     }
 
+    /// The prediction `(X-, P-) = (f(X, u, 0), A P A^T + W Q W^T)` (spec
+    /// section 1, eq. 1-2), `P-` exactly symmetric for a symmetric `P`.
+    ///
+    /// The default forms `A` and `W` with [`linearize`](Self::linearize) and
+    /// multiplies densely. Override it when `A` or `W` has structure a dense
+    /// product wastes work on (differential drive: `A` is the identity plus
+    /// one column); [`crate::jacobian_check::check_propagate`] verifies an
+    /// override against the dense products.
+    #[inline(always)]
+    fn propagate(
+        &self,
+        x: &SVector<T, N>,
+        u: &Self::Input,
+        p: &SMatrix<T, N, N>,
+    ) -> (SVector<T, N>, SMatrix<T, N, N>) {
+        let q = self.noise_cov(u);
+        let (x, a, w) = self.linearize(x, u);
+        (x, sandwich(&a, p) + sandwich(&w, &q))
+    }
+
     /// The mapped process noise `W Q W^T` at `(x, u)`.
     fn process_noise(&self, x: &SVector<T, N>, u: &Self::Input) -> SMatrix<T, N, N> {
         let w = self.jacobian_noise(x, u);
@@ -96,5 +117,26 @@ pub trait MeasurementModel<T: Scalar, const N: usize, const M: usize> {
     /// Default: plain subtraction.
     fn residual(&self, z: &SVector<T, M>, z_hat: &SVector<T, M>) -> SVector<T, M> {
         z - z_hat
+    }
+
+    /// The covariance projections `(P H^T, H P H^T)` at `x` that the
+    /// correction needs (spec section 1, eq. 3-4: `S = H P H^T + V R V^T`,
+    /// `G = P H^T S^-1`).
+    ///
+    /// The default multiplies densely with [`jacobian`](Self::jacobian).
+    /// Override it when `H` has structure, e.g. rows that select state
+    /// components (the IR pair of paper 001 measures `x` or `y`, and
+    /// `theta`): `P H^T` is then columns of `P`, with no multiplication.
+    /// [`crate::jacobian_check::check_project`] verifies an override against
+    /// the dense products.
+    #[inline(always)]
+    fn project(
+        &self,
+        x: &SVector<T, N>,
+        p: &SMatrix<T, N, N>,
+    ) -> (SMatrix<T, N, M>, SMatrix<T, M, M>) {
+        let h = self.jacobian(x);
+        let pht = mul_bt(p, &h);
+        (pht, mul(&h, &pht))
     }
 }

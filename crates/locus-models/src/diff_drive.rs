@@ -116,6 +116,43 @@ impl<T: Scalar> MotionModel<T, 3, 2> for DiffDrive<T> {
         )
     }
 
+    /// `P- = A P A^T + W Q W^T` in closed form (eq. 11-13): with
+    /// `A = I + [a02, a12, 0]^T e_3^T`, the product is the prior plus
+    /// rank-one terms in the third column of `P`, and `W Q W^T` is expanded
+    /// for the diagonal `Q`. One `sin_cos`; the upper triangle is computed and
+    /// mirrored (exactly symmetric).
+    #[inline]
+    fn propagate(
+        &self,
+        x: &SVector<T, 3>,
+        u: &WheelTravel<T>,
+        p: &SMatrix<T, 3, 3>,
+    ) -> (SVector<T, 3>, SMatrix<T, 3, 3>) {
+        let (d, dth) = self.increments(u);
+        let half = cast::<T>(0.5);
+        let (s, c) = (x[2] + dth * half).sin_cos();
+        let xp = Vector3::new(x[0] + d * c, x[1] + d * s, wrap_angle(x[2] + dth));
+        let (a02, a12) = (-d * s, d * c);
+        let (p00, p01, p02) = (p[(0, 0)], p[(0, 1)], p[(0, 2)]);
+        let (p11, p12, p22) = (p[(1, 1)], p[(1, 2)], p[(2, 2)]);
+        // (A P)[i][2] for i = 0, 1.
+        let t02 = p02 + a02 * p22;
+        let t12 = p12 + a12 * p22;
+        // W = [[c, -ws], [s, wc], [0, 1]].
+        let (ws, wc) = (d * half * s, d * half * c);
+        let (q11, q22) = (self.q11, self.q22);
+        let m00 = p00 + a02 * (p02 + t02) + (q11 * c * c + q22 * ws * ws);
+        let m01 = p01 + a02 * p12 + a12 * t02 + (q11 * c * s - q22 * ws * wc);
+        let m02 = t02 - q22 * ws;
+        let m11 = p11 + a12 * (p12 + t12) + (q11 * s * s + q22 * wc * wc);
+        let m12 = t12 + q22 * wc;
+        let m22 = p22 + q22;
+        (
+            xp,
+            SMatrix::<T, 3, 3>::new(m00, m01, m02, m01, m11, m12, m02, m12, m22),
+        )
+    }
+
     fn noise_cov(&self, _u: &WheelTravel<T>) -> SMatrix<T, 2, 2> {
         Matrix2::new(self.q11, T::zero(), T::zero(), self.q22)
     }

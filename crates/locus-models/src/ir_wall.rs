@@ -246,4 +246,28 @@ impl<T: Scalar> MeasurementModel<T, 3, 2> for IrPairObservation<T> {
     fn residual(&self, z: &SVector<T, 2>, z_hat: &SVector<T, 2>) -> SVector<T, 2> {
         Vector2::new(z[0] - z_hat[0], wrap_angle(z[1] - z_hat[1]))
     }
+
+    /// `H` selects `x` (or `y`) and `theta` (eq. 17): `P H^T` is two columns
+    /// of `P` and `H P H^T` its 2x2 sub-block, with no multiplication.
+    #[inline]
+    fn project(
+        &self,
+        _x: &SVector<T, 3>,
+        p: &SMatrix<T, 3, 3>,
+    ) -> (SMatrix<T, 3, 2>, SMatrix<T, 2, 2>) {
+        let k = match self.wall.axis {
+            WallAxis::X => 0,
+            WallAxis::Y => 1,
+        };
+        let pht = SMatrix::<T, 3, 2>::new(
+            p[(0, k)],
+            p[(0, 2)],
+            p[(1, k)],
+            p[(1, 2)],
+            p[(2, k)],
+            p[(2, 2)],
+        );
+        let hph = Matrix2::new(p[(k, k)], p[(k, 2)], p[(2, k)], p[(2, 2)]);
+        (pht, hph)
+    }
 }

@@ -9,10 +9,10 @@
 //! spacing 0.05-0.20 m and mounting offsets within +-0.1 m.
 
 use locus_core::jacobian_check::{
-    DEFAULT_STEP, DEFAULT_TOLERANCE, check_measurement_model, check_motion_model, compare,
-    numeric_jacobian,
+    DEFAULT_STEP, DEFAULT_TOLERANCE, check_measurement_model, check_motion_model, check_project,
+    check_propagate, compare, numeric_jacobian,
 };
-use locus_core::nalgebra::{SVector, Vector2, Vector3};
+use locus_core::nalgebra::{Matrix3, SVector, Vector2, Vector3};
 use locus_core::wrap_angle;
 use locus_models::ir_wall::observe;
 use locus_models::{AxisWall, DiffDrive, IrPair, IrPairObservation, WheelTravel};
@@ -34,8 +34,55 @@ fn wall(i: u8, lw: f64) -> AxisWall<f64> {
     }
 }
 
+/// A random symmetric positive-definite covariance `L L^T` (entries of `L`
+/// in +-`scale`, diagonal kept away from zero).
+fn spd(l: [f64; 6], scale: f64) -> Matrix3<f64> {
+    let l = Matrix3::new(
+        scale * (1.0 + l[0].abs()),
+        0.0,
+        0.0,
+        scale * l[1],
+        scale * (1.0 + l[2].abs()),
+        0.0,
+        scale * l[3],
+        scale * l[4],
+        scale * (1.0 + l[5].abs()),
+    );
+    l * l.transpose()
+}
+
+/// The closed-form overrides (`DiffDrive::propagate`,
+/// `IrPairObservation::project`) equal the core's dense products
+/// `A P A^T + W Q W^T`, `P H^T` and `H P H^T` to 1e-12 relative.
+const OVERRIDE_TOLERANCE: f64 = 1e-12;
+
 proptest! {
     #![proptest_config(config())]
+
+    #[test]
+    fn diff_drive_propagate_equals_the_dense_product(
+        x in -5.0..5.0f64, y in -5.0..5.0f64, th in -core::f64::consts::PI..core::f64::consts::PI,
+        d1 in -0.5..0.5f64, d2 in -0.5..0.5f64, b in 0.05..0.5f64,
+        l in prop::array::uniform6(-1.0..1.0f64), scale in 1e-3..1.0f64,
+    ) {
+        let model = DiffDrive::new(b, 1e-4, 1e-3);
+        let res = check_propagate(
+            &model, &Vector3::new(x, y, th), &WheelTravel { d1, d2 }, &spd(l, scale), OVERRIDE_TOLERANCE,
+        );
+        prop_assert!(res.is_ok(), "{}", res.unwrap_err());
+    }
+
+    #[test]
+    fn ir_pair_project_equals_the_dense_products(
+        x in -0.95..0.95f64, y in -0.95..0.95f64, th in -core::f64::consts::PI..core::f64::consts::PI,
+        w in 0u8..4, l in prop::array::uniform6(-1.0..1.0f64), scale in 1e-3..1.0f64,
+    ) {
+        let obs = IrPairObservation {
+            pair: IrPair::centred(0.1), wall: wall(w, 1.0), ds1: 0.15, ds2: 0.16, r11: 1e-4, r22: 2e-4,
+        };
+        let checked = check_project(&obs, &Vector3::new(x, y, th), &spd(l, scale), OVERRIDE_TOLERANCE);
+        prop_assert_eq!(checked, Ok(true));
+    }
 
     #[test]
     fn diff_drive_a_and_w_match_finite_differences(
