@@ -39,11 +39,9 @@
 //! All randomness comes from one `StdRng` seeded with the run's seed, so a
 //! run is reproducible from `(config, seed)` (wall-clock timing aside).
 
-use std::time::Instant;
-
 use locus_control::{Controller, FollowPath, wheel_speeds};
 use locus_core::nalgebra::{Matrix3, Vector2, Vector3};
-use locus_core::{Belief, ChiSquareGate, Ekf, MeasurementModel, MotionModel, chi2, wrap_angle};
+use locus_core::{Belief, ChiSquareGate, Ekf, MeasurementModel, MotionModel, wrap_angle};
 use locus_models::{DiffDrive, IrPair, IrPairObservation, WheelTravel, associate_ir_wall};
 use locus_odometry::{Wheel as EncoderWheel, wrapping_diff};
 use rand::SeedableRng;
@@ -51,6 +49,7 @@ use rand::rngs::StdRng;
 use rand_distr::{Distribution, StandardNormal};
 
 use crate::robot::{Command, Kinematics, Pose, Robot, RobotError, SlipSchedule, Wheel};
+use crate::scenario::{Record, Sample, Summary, Tally};
 use crate::sensors::{Encoder, IrPairSensor, SensorError, SharpIr};
 use crate::world::World;
 
@@ -269,8 +268,8 @@ pub struct StepRecord {
     pub truth: Pose,
     /// EKF estimate `[x, y, theta]` (m, m, rad).
     pub ekf: [f64; 3],
-    /// EKF covariance `[P_xx, P_yy, P_thth, P_xy]` (m^2, m^2, rad^2, m^2).
-    pub ekf_p: [f64; 4],
+    /// EKF covariance of `[x, y, theta]` (m^2, m rad, rad^2), symmetric.
+    pub ekf_cov: [[f64; 3]; 3],
     /// Odometry-only estimate `[x, y, theta]` (m, m, rad).
     pub odometry: [f64; 3],
     /// Wheel travels from the encoders `[d1 (right), d2 (left)]` (m).
@@ -314,14 +313,16 @@ impl StepRecord {
         "applied",
         "nees",
     ];
+}
 
-    /// The CSV header line (no newline).
-    pub fn csv_header() -> String {
+impl Record for StepRecord {
+    /// The CSV header line (no newline): [`StepRecord::CSV_COLUMNS`].
+    fn csv_header() -> String {
         Self::CSV_COLUMNS.join(",")
     }
 
     /// The record as one CSV line (no newline); absent values are empty.
-    pub fn csv_row(&self) -> String {
+    fn csv_row(&self) -> String {
         fn opt(v: Option<f64>) -> String {
             v.map_or_else(String::new, |v| format!("{v:.9}"))
         }
@@ -336,10 +337,10 @@ impl StepRecord {
             f(self.ekf[0]),
             f(self.ekf[1]),
             f(self.ekf[2]),
-            format!("{:.6e}", self.ekf_p[0]),
-            format!("{:.6e}", self.ekf_p[1]),
-            format!("{:.6e}", self.ekf_p[2]),
-            format!("{:.6e}", self.ekf_p[3]),
+            format!("{:.6e}", self.ekf_cov[0][0]),
+            format!("{:.6e}", self.ekf_cov[1][1]),
+            format!("{:.6e}", self.ekf_cov[2][2]),
+            format!("{:.6e}", self.ekf_cov[0][1]),
             f(self.odometry[0]),
             f(self.odometry[1]),
             f(self.odometry[2]),
@@ -353,58 +354,28 @@ impl StepRecord {
         ];
         fields.join(",")
     }
-}
 
-/// Summary of a closed-loop run. Errors are against the true pose.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Summary {
-    /// Steps simulated.
-    pub steps: usize,
-    /// Simulated time (s).
-    pub sim_time: f64,
-    /// Laps of the square completed.
-    pub laps_completed: usize,
-    /// EKF position RMSE (m).
-    pub ekf_position_rmse: f64,
-    /// EKF heading RMSE (rad, wrapped errors).
-    pub ekf_heading_rmse: f64,
-    /// EKF largest position error (m).
-    pub ekf_max_position_error: f64,
-    /// Odometry-only position RMSE (m).
-    pub odometry_position_rmse: f64,
-    /// Odometry-only heading RMSE (rad).
-    pub odometry_heading_rmse: f64,
-    /// Odometry-only largest position error (m).
-    pub odometry_max_position_error: f64,
-    /// Mean NEES of the EKF (3 dof; 3 for a consistent filter).
-    pub mean_nees: f64,
-    /// Share of steps whose NEES lies in the two-sided 95 % chi-square(3)
-    /// interval (0.95 for a consistent filter).
-    pub nees_in_interval: f64,
-    /// Steps with both IR sensors in range.
-    pub readings: usize,
-    /// Readings associated with a wall (the others were dropped).
-    pub associated: usize,
-    /// Associated readings whose correction passed the gate and was applied.
-    pub corrections: usize,
-    /// Share of associated readings applied (`corrections / associated`; 0
-    /// when nothing was associated).
-    pub acceptance: f64,
-    /// Wall-clock duration of the run (s), including the sink's time. Not
-    /// reproducible.
-    pub wall_clock: f64,
-    /// Simulated time over wall-clock time. Not reproducible.
-    pub real_time_factor: f64,
-}
-
-impl Summary {
-    /// The same summary with the wall-clock fields zeroed, for comparing
-    /// runs.
-    #[must_use]
-    pub fn without_timing(mut self) -> Self {
-        self.wall_clock = 0.0;
-        self.real_time_factor = 0.0;
-        self
+    fn sample(&self) -> Sample {
+        let t = &self.truth;
+        Sample {
+            step: self.step,
+            time: self.time,
+            truth: [t.x, t.y, 0.0],
+            truth_heading: t.theta,
+            estimate: [self.ekf[0], self.ekf[1], 0.0],
+            estimate_heading: self.ekf[2],
+            heading_error: wrap_angle(t.theta - self.ekf[2]),
+            covariance: self.ekf_cov,
+            var_z: 0.0,
+            odometry: Some((
+                [self.odometry[0], self.odometry[1], 0.0],
+                wrap_angle(t.theta - self.odometry[2]),
+            )),
+            nees: self.nees,
+            nees_dof: 3,
+            correction: self.nis.map(|nis| (nis, 2, self.applied)),
+            measured: self.ir.is_some(),
+        }
     }
 }
 
@@ -422,12 +393,6 @@ fn nees(x: &Vector3<f64>, p: &Matrix3<f64>, truth: &Pose) -> f64 {
 fn gauss(rng: &mut StdRng, std: f64) -> f64 {
     let n: f64 = StandardNormal.sample(rng);
     std * n
-}
-
-/// Squared position error and wrapped heading error of `x` against `truth`.
-fn errors(x: &Vector3<f64>, truth: &Pose) -> (f64, f64) {
-    let (dx, dy) = (truth.x - x[0], truth.y - x[1]);
-    (dx * dx + dy * dy, wrap_angle(truth.theta - x[2]))
 }
 
 /// An ideal-mode observation and its `z` (m, rad).
@@ -479,7 +444,8 @@ fn ideal_observation(
 }
 
 /// Runs the `square` scenario with `cfg` from `seed`, calling `sink` with
-/// every step's record as the run goes, and returns the summary.
+/// every step's record as the run goes, and returns the summary (a
+/// [`Tally`] of every step's [`Record::sample`]).
 ///
 /// # Errors
 /// [`Error::Config`] for an invalid configuration; a robot, sensor or
@@ -491,7 +457,7 @@ pub fn run_square(
     sink: &mut impl FnMut(&StepRecord),
 ) -> Result<Summary, Error> {
     cfg.validate()?;
-    let started = Instant::now();
+    let mut tally = Tally::new(3)?;
     let mut rng = StdRng::seed_from_u64(seed);
     let world = World::square_arena();
 
@@ -558,15 +524,9 @@ pub fn run_square(
     let q_std = [cfg.q11.sqrt(), cfg.q22.sqrt()];
 
     let mut controller = FollowPath::square(cfg.control);
-    let nees_lo = chi2::quantile(0.025, 3)?;
-    let nees_hi = chi2::quantile(0.975, 3)?;
 
     let max_steps = (cfg.max_time / cfg.dt).ceil() as usize;
     let mut laps = 0usize;
-    let (mut sq_pos, mut sq_th, mut max_pos) = (0.0, 0.0, 0.0f64);
-    let (mut odo_sq_pos, mut odo_sq_th, mut odo_max_pos) = (0.0, 0.0, 0.0f64);
-    let (mut nees_sum, mut nees_in) = (0.0, 0usize);
-    let (mut readings, mut associated, mut corrections) = (0usize, 0usize, 0usize);
     let mut steps = 0usize;
 
     while steps < max_steps {
@@ -646,39 +606,27 @@ pub fn run_square(
             });
             (reading, observation)
         };
-        readings += usize::from(reading.is_some());
         if let Some((obs, z)) = observation {
-            associated += 1;
             let c = ekf.correct(&belief, &obs, &z)?;
             innovation = Some([c.innovation[0], c.innovation[1]]);
             nis = Some(c.nis);
             applied = c.applied;
-            corrections += usize::from(c.applied);
             belief = c.belief;
         }
 
         let n = nees(&belief.x, &belief.p, &truth);
-        nees_sum += n;
-        if (nees_lo..=nees_hi).contains(&n) {
-            nees_in += 1;
-        }
-        let (e2, eth) = errors(&belief.x, &truth);
-        sq_pos += e2;
-        sq_th += eth * eth;
-        max_pos = max_pos.max(e2.sqrt());
-        let (o2, oth) = errors(&odo.x, &truth);
-        odo_sq_pos += o2;
-        odo_sq_th += oth * oth;
-        odo_max_pos = odo_max_pos.max(o2.sqrt());
-
         steps += 1;
         let p = &belief.p;
-        sink(&StepRecord {
+        let record = StepRecord {
             step: steps - 1,
             time: steps as f64 * cfg.dt,
             truth,
             ekf: [belief.x[0], belief.x[1], belief.x[2]],
-            ekf_p: [p[(0, 0)], p[(1, 1)], p[(2, 2)], p[(0, 1)]],
+            ekf_cov: [
+                [p[(0, 0)], p[(0, 1)], p[(0, 2)]],
+                [p[(1, 0)], p[(1, 1)], p[(1, 2)]],
+                [p[(2, 0)], p[(2, 1)], p[(2, 2)]],
+            ],
             odometry: [odo.x[0], odo.x[1], odo.x[2]],
             wheel_travel: [u.d1, u.d2],
             ir: reading,
@@ -686,37 +634,10 @@ pub fn run_square(
             nis,
             applied,
             nees: n,
-        });
+        };
+        tally.push(&record.sample());
+        sink(&record);
     }
 
-    let n = steps.max(1) as f64;
-    let sim_time = steps as f64 * cfg.dt;
-    let wall_clock = started.elapsed().as_secs_f64();
-    Ok(Summary {
-        steps,
-        sim_time,
-        laps_completed: laps,
-        ekf_position_rmse: (sq_pos / n).sqrt(),
-        ekf_heading_rmse: (sq_th / n).sqrt(),
-        ekf_max_position_error: max_pos,
-        odometry_position_rmse: (odo_sq_pos / n).sqrt(),
-        odometry_heading_rmse: (odo_sq_th / n).sqrt(),
-        odometry_max_position_error: odo_max_pos,
-        mean_nees: nees_sum / n,
-        nees_in_interval: nees_in as f64 / n,
-        readings,
-        associated,
-        corrections,
-        acceptance: if associated > 0 {
-            corrections as f64 / associated as f64
-        } else {
-            0.0
-        },
-        wall_clock,
-        real_time_factor: if wall_clock > 0.0 {
-            sim_time / wall_clock
-        } else {
-            f64::INFINITY
-        },
-    })
+    Ok(tally.summary(laps))
 }

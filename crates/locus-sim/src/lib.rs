@@ -15,7 +15,8 @@ pub mod scenario;
 pub mod sensors;
 pub mod world;
 
-pub use closed_loop::{SquareConfig, StepRecord, Summary, run_square};
+pub use closed_loop::{SquareConfig, StepRecord, run_square};
 pub use robot::{Command, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, WheelTravel};
+pub use scenario::{Record, Sample, Summary, Tally};
 pub use sensors::{Encoder, IrPairSensor, Laser, SensorError, SharpIr};
 pub use world::{Hit, World};

@@ -4,6 +4,7 @@
 //! `locus-core` (the filter) and `locus-models` (the papers' models).
 
 mod demo;
+mod output;
 mod run;
 
 use std::process::ExitCode;
@@ -40,6 +41,8 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // `locus run | head`: the reader has gone; nothing left to say.
+        Err(err) if output::is_broken_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("error: {err}");
             for cause in err.chain().skip(1) {

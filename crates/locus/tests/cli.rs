@@ -252,3 +252,24 @@ fn run_monte_carlo_prints_the_table_and_writes_runs_csv() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `locus run | head`: a reader that goes away early is not an error and
+/// never a panic.
+#[test]
+fn run_into_a_closed_pipe_exits_quietly() {
+    let dir = temp_dir("broken-pipe");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_locus"))
+        .args(["run", "--laps", "1", "--out"])
+        .arg(&dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("start locus");
+    // Close the read end before locus prints anything.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("wait for locus");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+    let _ = std::fs::remove_dir_all(&dir);
+}
