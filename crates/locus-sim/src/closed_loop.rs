@@ -64,6 +64,15 @@ pub enum Error {
     /// A configuration value is invalid; the message names it.
     #[error("invalid configuration: {0}")]
     Config(&'static str),
+    /// A configuration field is out of its domain.
+    #[error("invalid configuration: `{field}` {reason}")]
+    Invalid {
+        /// The field's name as in a scenario file (`control.v_ref` for a
+        /// nested one).
+        field: &'static str,
+        /// What the field must be.
+        reason: &'static str,
+    },
     /// The simulated robot rejected a command.
     #[error("robot: {0}")]
     Robot(#[from] RobotError),
@@ -75,8 +84,10 @@ pub enum Error {
     Filter(#[from] locus_core::Error),
 }
 
-/// How the simulated noise is generated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// How the simulated noise is generated (`"realistic"` or `"ideal"` in a
+/// scenario file).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum NoiseModel {
     /// The `square` scenario: exact-arc robot with slip bumps, quantised
     /// encoders with a calibration error, IR readings through the sensor
@@ -91,7 +102,12 @@ pub enum NoiseModel {
 /// Configuration of the `square` scenario. Every value is SI (m, s, rad);
 /// variances are per filter step. See [`SquareConfig::default`] for the
 /// \[assumed\] values of spec section 3.
-#[derive(Debug, Clone, Copy, PartialEq)]
+///
+/// In a scenario file (TOML) every field is optional and overrides the
+/// default; `gate_confidence = "none"` turns the gate off, `[control]`
+/// holds the controller's fields.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct SquareConfig {
     /// Filter, controller and simulation step `dt` (s). Default 0.01 s (100 Hz).
     pub dt: f64,
@@ -148,12 +164,63 @@ pub struct SquareConfig {
     pub r22: f64,
     /// Confidence of the chi-square gate on the NIS (`None`: no gate).
     /// Default 0.99.
+    #[serde(with = "gate_serde")]
     pub gate_confidence: Option<f64>,
     /// Path controller parameters (`V_ref` 0.1 m/s, ...).
+    #[serde(with = "ControlDef")]
     pub control: locus_control::Config,
     /// How the simulated noise is generated. Default
     /// [`NoiseModel::Realistic`].
     pub noise: NoiseModel,
+}
+
+/// Serde mirror of [`locus_control::Config`] (the `[control]` table of a
+/// scenario file; fields and units as there).
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(
+    remote = "locus_control::Config",
+    default = "locus_control::Config::default",
+    deny_unknown_fields
+)]
+struct ControlDef {
+    v_ref: f64,
+    w_ref: f64,
+    k_cross: f64,
+    k_heading: f64,
+    k_pos: f64,
+    pos_tol: f64,
+    heading_tol: f64,
+}
+
+/// `gate_confidence`: a number in (0, 1), or the string `"none"` for no
+/// gate.
+mod gate_serde {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Gate {
+        Confidence(f64),
+        Word(String),
+    }
+
+    #[allow(clippy::ref_option)]
+    pub(super) fn serialize<S: Serializer>(v: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+        match v {
+            Some(c) => s.serialize_f64(*c),
+            None => s.serialize_str("none"),
+        }
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+        match Gate::deserialize(d) {
+            Ok(Gate::Confidence(c)) => Ok(Some(c)),
+            Ok(Gate::Word(w)) if w == "none" => Ok(None),
+            _ => Err(serde::de::Error::custom(
+                "expected a confidence in (0, 1) or \"none\"",
+            )),
+        }
+    }
 }
 
 impl Default for SquareConfig {
@@ -209,49 +276,90 @@ impl SquareConfig {
     /// `Ok(())` if every value is in its domain.
     ///
     /// # Errors
-    /// [`Error::Config`] naming the first bad value.
+    /// [`Error::Invalid`] naming the first bad field (as in a scenario
+    /// file).
     pub fn validate(&self) -> Result<(), Error> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
-        let checks: [(bool, &'static str); 12] = [
-            (pos(self.dt), "dt must be finite and > 0"),
-            (self.laps > 0, "laps must be >= 1"),
-            (pos(self.max_time), "max_time must be finite and > 0"),
-            (pos(self.wheelbase), "wheelbase must be finite and > 0"),
+        let range = |r: (f64, f64)| r.0.is_finite() && r.1.is_finite() && r.0 <= r.1;
+        let c = &self.control;
+        let checks: [(bool, &'static str, &'static str); 23] = [
+            (pos(self.dt), "dt", "must be finite and > 0 s"),
+            (self.laps > 0, "laps", "must be >= 1"),
+            (pos(self.max_time), "max_time", "must be finite and > 0 s"),
+            (pos(self.wheelbase), "wheelbase", "must be finite and > 0 m"),
             (
                 pos(self.wheel_radius),
-                "wheel_radius must be finite and > 0",
+                "wheel_radius",
+                "must be finite and > 0 m",
+            ),
+            (self.encoder_lines > 0, "encoder_lines", "must be >= 1"),
+            (
+                pos(self.encoder_gear),
+                "encoder_gear",
+                "must be finite and > 0",
             ),
             (
                 self.right_scale_error.is_finite() && self.right_scale_error > -1.0,
-                "right_scale_error must be finite and > -1",
+                "right_scale_error",
+                "must be finite and > -1",
+            ),
+            (
+                range(self.slip_length) && self.slip_length.0 >= 0.0,
+                "slip_length",
+                "must be [min, max] with 0 <= min <= max (m)",
+            ),
+            (
+                range(self.slip_scale) && self.slip_scale.0 > 0.0,
+                "slip_scale",
+                "must be [min, max] with 0 < min <= max",
             ),
             (
                 self.start.iter().all(|v| v.is_finite()),
-                "start must be finite",
+                "start",
+                "must be finite",
             ),
             (
                 self.initial_std.iter().all(|v| pos(*v)),
-                "initial_std must be finite and > 0",
-            ),
-            (pos(self.association_range), "association_range must be > 0"),
-            (
-                pos(self.q11) && pos(self.q22),
-                "Q11, Q22 must be finite and > 0",
+                "initial_std",
+                "must be finite and > 0",
             ),
             (
-                pos(self.r11) && pos(self.r22),
-                "R11, R22 must be finite and > 0",
+                pos(self.ir_spacing),
+                "ir_spacing",
+                "must be finite and > 0 m",
+            ),
+            (pos(self.ir_sigma), "ir_sigma", "must be finite and > 0 m"),
+            (
+                pos(self.association_range),
+                "association_range",
+                "must be finite and > 0 m",
+            ),
+            (pos(self.q11), "q11", "must be finite and > 0 m^2"),
+            (pos(self.q22), "q22", "must be finite and > 0 rad^2"),
+            (pos(self.r11), "r11", "must be finite and > 0 m^2"),
+            (pos(self.r22), "r22", "must be finite and > 0 m^2"),
+            (
+                self.gate_confidence
+                    .is_none_or(|g| g.is_finite() && g > 0.0 && g < 1.0),
+                "gate_confidence",
+                "must be in (0, 1) or \"none\"",
+            ),
+            (pos(c.v_ref), "control.v_ref", "must be finite and > 0 m/s"),
+            (
+                pos(c.w_ref),
+                "control.w_ref",
+                "must be finite and > 0 rad/s",
             ),
             (
-                self.slip_length.0.is_finite()
-                    && self.slip_length.1.is_finite()
-                    && self.slip_scale.0.is_finite()
-                    && self.slip_scale.1.is_finite(),
-                "slip ranges must be finite",
+                [c.k_cross, c.k_heading, c.k_pos, c.pos_tol, c.heading_tol]
+                    .iter()
+                    .all(|v| pos(*v)),
+                "control",
+                "gains and tolerances must be finite and > 0",
             ),
         ];
-        match checks.iter().find(|(ok, _)| !ok) {
-            Some((_, msg)) => Err(Error::Config(msg)),
+        match checks.iter().find(|(ok, _, _)| !ok) {
+            Some(&(_, field, reason)) => Err(Error::Invalid { field, reason }),
             None => Ok(()),
         }
     }

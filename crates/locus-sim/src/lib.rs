@@ -12,6 +12,7 @@
 pub mod closed_loop;
 pub mod robot;
 pub mod scenario;
+pub mod scenario_file;
 pub mod sensors;
 pub mod world;
 

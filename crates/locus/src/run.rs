@@ -19,14 +19,9 @@ use clap::Args;
 use comfy_table::{Table, presets::UTF8_FULL};
 use locus_sim::closed_loop::{SquareConfig, run_square};
 use locus_sim::scenario::{Record, Summary};
+use locus_sim::scenario_file::{self, BUILTIN, ScenarioConfig};
 
 use crate::output::print_out;
-
-/// The scenarios `locus run` knows: `square` (paper 001's arena with
-/// realistic noise: encoder quantisation, scale error, slip) and
-/// `square-ideal` (the same with noise exactly as the filter's Q and R
-/// assume: no slip, no quantisation, no gate).
-pub const SCENARIOS: [&str; 2] = ["square", "square-ideal"];
 
 /// The CSV writer is flushed every this many steps (and at the end), so a
 /// killed run leaves a readable prefix: `log.csv` is always a prefix of the
@@ -37,10 +32,17 @@ const FLUSH_EVERY: usize = 100;
 /// Arguments of `locus run`.
 #[derive(Args, Debug)]
 pub struct RunArgs {
-    /// Scenario to run: `square` (paper 001, realistic noise) or
-    /// `square-ideal` (noise exactly as the filter assumes).
-    #[arg(default_value = "square")]
+    /// Scenario to run: a built-in name, `square` (paper 001's arena with
+    /// realistic noise: encoder quantisation, scale error, slip) or
+    /// `square-ideal` (noise exactly as the filter's Q and R assume), or a
+    /// scenario file `FILE.toml` whose `scenario = "square"` picks the kind
+    /// and whose other keys override its defaults (see `--print-config`).
+    #[arg(default_value = "square", value_name = "SCENARIO|FILE")]
     scenario: String,
+    /// Print the scenario's complete configuration as a TOML scenario file
+    /// (a template: every key, SI units) and exit without running.
+    #[arg(long)]
+    print_config: bool,
     /// Seed of the random numbers (a run is reproducible from its seed).
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -108,30 +110,53 @@ fn square_info(name: &str, cfg: &SquareConfig) -> Info {
     }
 }
 
+/// The scenario named on the command line: its name (a built-in name, or
+/// the file's stem) and configuration.
+fn resolve(arg: &str) -> Result<(String, ScenarioConfig)> {
+    if let Some(cfg) = ScenarioConfig::builtin(arg) {
+        return Ok((arg.to_string(), cfg));
+    }
+    let path = Path::new(arg);
+    if path.extension().is_some_and(|e| e == "toml") || path.is_file() {
+        let cfg = scenario_file::load(path)?;
+        let name = path
+            .file_stem()
+            .map_or_else(|| "file".to_string(), |s| s.to_string_lossy().into_owned());
+        return Ok((name, cfg));
+    }
+    bail!(
+        "unknown scenario `{arg}`; supported scenarios: {}, or a scenario file FILE.toml",
+        BUILTIN.join(", ")
+    )
+}
+
 /// Runs the scenario named in `args`, writing the log as it goes, then
-/// prints the summary.
+/// prints the summary (or, with `--print-config`, prints its configuration).
 pub fn run(args: &RunArgs) -> Result<()> {
-    if !SCENARIOS.contains(&args.scenario.as_str()) {
-        bail!(
-            "unknown scenario `{}`; supported scenarios: {}",
-            args.scenario,
-            SCENARIOS.join(", ")
-        );
+    let (name, config) = resolve(&args.scenario)?;
+    if args.print_config {
+        let kind = if BUILTIN.contains(&args.scenario.as_str()) {
+            args.scenario.as_str()
+        } else {
+            config.kind()
+        };
+        return print_out(&config.to_toml(kind)?);
     }
     let out = args
         .out
         .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("out/run-{}", args.scenario)));
-    let base = if args.scenario == "square-ideal" {
-        SquareConfig::ideal()
-    } else {
-        SquareConfig::default()
-    };
-    let cfg = square_config(args, base)?;
-    let info = square_info(&args.scenario, &cfg);
-    execute(args, &info, &out, |seed, mut sink| {
-        run_square(&cfg, seed, &mut sink)
-    })
+        .unwrap_or_else(|| PathBuf::from(format!("out/run-{name}")));
+    // One arm per scenario kind: its command-line overrides, its Info and
+    // its runner.
+    match config {
+        ScenarioConfig::Square(base) => {
+            let cfg = square_config(args, base)?;
+            let info = square_info(&name, &cfg);
+            execute(args, &info, &out, |seed, mut sink| {
+                run_square(&cfg, seed, &mut sink)
+            })
+        }
+    }
 }
 
 /// Runs a scenario given as a runner closure `(seed, sink) -> summary`:

@@ -273,3 +273,46 @@ fn run_into_a_closed_pipe_exits_quietly() {
     assert!(out.status.success(), "{:?}: {stderr}", out.status);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 5: `locus run FILE.toml` runs a scenario file; `--print-config`
+/// prints a template that runs the same; a bad file names line and field.
+#[test]
+fn run_a_scenario_file_and_print_its_template() {
+    let dir = temp_dir("scenario-file");
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let template = locus(&["run", "--print-config", "square"]);
+    assert!(template.status.success());
+    let text = String::from_utf8(template.stdout).unwrap();
+    assert!(text.contains("scenario = \"square\""), "{text}");
+    let file = dir.join("one-lap.toml");
+    std::fs::write(&file, text.replace("laps = 2", "laps = 1")).expect("write");
+    let out = locus(&[
+        "run",
+        file.to_str().expect("utf-8"),
+        "--out",
+        dir.join("out").to_str().expect("utf-8"),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("locus run one-lap:"), "{stdout}");
+    assert!(stdout.contains(", 1 laps)"), "{stdout}");
+
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        "scenario = \"square\"\nlaps = 1\nwheelbase = \"wide\"\n",
+    )
+    .expect("write");
+    let out = locus(&["run", bad.to_str().expect("utf-8")]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("bad.toml, line 3, column 13, field `wheelbase`"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
