@@ -5,6 +5,7 @@
 
 mod demo;
 mod output;
+mod plot;
 mod run;
 
 use std::process::ExitCode;

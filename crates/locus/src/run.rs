@@ -17,8 +17,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use comfy_table::{Table, presets::UTF8_FULL};
+use locus_models::laser_wall::Segment;
 use locus_sim::closed_loop::{SquareConfig, run_square};
-use locus_sim::scenario::{Record, Summary};
+use locus_sim::scenario::{Record, Sample, Summary};
 use locus_sim::scenario_file::{self, BUILTIN, ScenarioConfig};
 
 use crate::output::print_out;
@@ -63,6 +64,13 @@ pub struct RunArgs {
     /// and `metrics.json`.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Do not draw the pictures of a single run. By default one run also
+    /// writes `map`, `errors` and `covariance` as PNG and SVG into the
+    /// output directory: walls with the true, estimated and odometry paths
+    /// and 3-sigma covariance ellipses; x, y, heading errors with +-3 sigma
+    /// bands; the variances over time (log scale).
+    #[arg(long)]
+    no_plots: bool,
 }
 
 /// Simulated-time limit per lap when `--laps` is given (s).
@@ -85,6 +93,8 @@ pub struct Info {
     pub dt: f64,
     /// Laps to drive, for scenarios that drive laps.
     pub laps: Option<usize>,
+    /// The map's walls (m, world frame), for the pictures.
+    pub walls: Vec<Segment<f64>>,
 }
 
 /// The square scenario's configuration with the command-line overrides.
@@ -107,6 +117,7 @@ fn square_info(name: &str, cfg: &SquareConfig) -> Info {
         measurement: "IR",
         dt: cfg.dt,
         laps: Some(cfg.laps),
+        walls: locus_sim::World::square_arena().walls,
     }
 }
 
@@ -184,8 +195,12 @@ where
 
     let mut io_error: Option<std::io::Error> = None;
     let mut steps = 0usize;
+    let mut samples: Vec<Sample> = Vec::new();
     let mut sink = |r: &R| {
         steps += 1;
+        if !args.no_plots {
+            samples.push(r.sample());
+        }
         if io_error.is_some() {
             return;
         }
@@ -210,9 +225,27 @@ where
     fs::write(&metrics_path, metrics_json(info, args.seed, &summary))
         .with_context(|| format!("writing {}", metrics_path.display()))?;
 
+    let pictures = if args.no_plots {
+        Vec::new()
+    } else {
+        let title = format!("locus run {}, seed {}", info.name, args.seed);
+        crate::plot::write_all(out, &samples, &info.walls, &title)?
+    };
+
     let mut text = summary_text(args, info, &summary);
     text.push_str(&format!("log: {}\n", csv_path.display()));
     text.push_str(&format!("metrics: {}\n", metrics_path.display()));
+    if !pictures.is_empty() {
+        let names: Vec<String> = pictures
+            .iter()
+            .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+            .collect();
+        text.push_str(&format!(
+            "pictures: {} in {}\n",
+            names.join(", "),
+            out.display()
+        ));
+    }
     print_out(&text)
 }
 

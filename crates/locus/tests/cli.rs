@@ -316,3 +316,51 @@ fn run_a_scenario_file_and_print_its_template() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 5: one run draws its pictures (PNG and SVG) unless `--no-plots`.
+#[test]
+fn run_writes_the_pictures_as_png_and_svg() {
+    let dir = temp_dir("pictures");
+    let out = locus(&["run", "--laps", "1", "--out", dir.to_str().expect("utf-8")]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for name in ["map", "errors", "covariance"] {
+        let png = std::fs::read(dir.join(format!("{name}.png"))).expect("png");
+        assert!(
+            png.starts_with(b"\x89PNG\r\n\x1a\n"),
+            "{name}.png signature"
+        );
+        assert!(png.len() > 10_000, "{name}.png: {} bytes", png.len());
+        let svg = std::fs::read_to_string(dir.join(format!("{name}.svg"))).expect("svg");
+        assert!(svg.contains("<svg"), "{name}.svg");
+        assert!(
+            svg.contains("[m]") || svg.contains("[s]"),
+            "{name}.svg axis units"
+        );
+    }
+    let svg = std::fs::read_to_string(dir.join("map.svg")).expect("svg");
+    assert!(svg.contains("3-sigma ellipse"), "ellipse label");
+    assert!(svg.contains("98.9 %"), "ellipse probability");
+
+    let bare = temp_dir("no-pictures");
+    let out = locus(&[
+        "run",
+        "--laps",
+        "1",
+        "--no-plots",
+        "--out",
+        bare.to_str().expect("utf-8"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(bare.join("log.csv").exists());
+    assert!(!bare.join("map.png").exists(), "--no-plots drew a map");
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&bare);
+}
