@@ -146,8 +146,13 @@ pub struct SquareConfig {
     pub initial_std: [f64; 3],
     /// IR pair spacing `L` (m). Default 0.10 m.
     pub ir_spacing: f64,
-    /// IR distance noise standard deviation (m). Default 0.005 m.
+    /// IR distance noise standard deviation (m, >= 0; 0: noise-free
+    /// readings). Default 0.005 m.
     pub ir_sigma: f64,
+    /// Whether the EKF uses the IR readings. `false`: odometry only (the
+    /// readings are still simulated, so the random draws stay those of a
+    /// run with IR, but never reach the filter). Default `true`.
+    pub use_ir: bool,
     /// Largest estimated pair-to-wall distance accepted by the data
     /// association (m): the 0.30 m range plus a margin. Default 0.40 m.
     pub association_range: f64,
@@ -245,6 +250,7 @@ impl Default for SquareConfig {
             initial_std: [0.01, 0.01, 0.02],
             ir_spacing: 0.10,
             ir_sigma: 0.005,
+            use_ir: true,
             association_range: 0.40,
             q11: 0.5e-3 * 0.5e-3,
             q22: 1e-3 * 1e-3,
@@ -328,7 +334,11 @@ impl SquareConfig {
                 "ir_spacing",
                 "must be finite and > 0 m",
             ),
-            (pos(self.ir_sigma), "ir_sigma", "must be finite and > 0 m"),
+            (
+                self.ir_sigma.is_finite() && self.ir_sigma >= 0.0,
+                "ir_sigma",
+                "must be finite and >= 0 m",
+            ),
             (
                 pos(self.association_range),
                 "association_range",
@@ -391,13 +401,19 @@ pub struct StepRecord {
     pub nis: Option<f64>,
     /// Whether the correction was applied (passed the gate).
     pub applied: bool,
+    /// Diagonal of `H K` (K the Kalman gain) when a reading was associated:
+    /// the share of the position innovation moved into the measured
+    /// position coordinate and of the heading innovation into the heading
+    /// (0: measurement ignored, 1: taken as is). `[0, 0]` if the gate
+    /// rejected the correction.
+    pub gain: Option<[f64; 2]>,
     /// NEES of the EKF after the step (3 dof, heading error wrapped).
     pub nees: f64,
 }
 
 impl StepRecord {
     /// Column names of [`StepRecord::csv_row`], units in brackets.
-    pub const CSV_COLUMNS: [&'static str; 22] = [
+    pub const CSV_COLUMNS: [&'static str; 24] = [
         "step",
         "time[s]",
         "true_x[m]",
@@ -420,6 +436,8 @@ impl StepRecord {
         "nis",
         "applied",
         "nees",
+        "gain_pos",
+        "gain_theta",
     ];
 }
 
@@ -459,6 +477,8 @@ impl Record for StepRecord {
             opt(self.nis),
             u8::from(self.applied).to_string(),
             format!("{:.6}", self.nees),
+            opt(self.gain.map(|g| g[0])),
+            opt(self.gain.map(|g| g[1])),
         ];
         fields.join(",")
     }
@@ -495,6 +515,18 @@ fn nees(x: &Vector3<f64>, p: &Matrix3<f64>, truth: &Pose) -> f64 {
         wrap_angle(truth.theta - x[2]),
     );
     p.cholesky().map_or(f64::INFINITY, |c| e.dot(&c.solve(&e)))
+}
+
+/// Diagonal of `H K = H P H^T S^-1` at the prior `belief` for `obs`
+/// (`S = H P H^T + V R V^T`); `[0, 0]` if `S` is singular.
+fn gain_diagonal(obs: &IrPairObservation<f64>, belief: &Belief<f64, 3>) -> [f64; 2] {
+    let h = obs.jacobian(&belief.x);
+    let hph = h * belief.p * h.transpose();
+    let s = hph + obs.noise(&belief.x);
+    s.try_inverse().map_or([0.0, 0.0], |si| {
+        let hk = hph * si;
+        [hk[(0, 0)], hk[(1, 1)]]
+    })
 }
 
 /// A draw from `N(0, std^2)`.
@@ -685,7 +717,7 @@ pub fn run_square(
         belief = ekf.predict(&belief, &model, &u)?;
         odo = ekf.predict(&odo, &model, &u)?;
 
-        let (mut innovation, mut nis, mut applied) = (None, None, false);
+        let (mut innovation, mut nis, mut applied, mut gain) = (None, None, false, None);
         // The raw readings (for the log) and, if associated, the observation.
         let (reading, observation) = if ideal {
             let r_std = [cfg.r11.sqrt(), cfg.r22.sqrt()];
@@ -714,8 +746,14 @@ pub fn run_square(
             });
             (reading, observation)
         };
+        let observation = observation.filter(|_| cfg.use_ir);
         if let Some((obs, z)) = observation {
             let c = ekf.correct(&belief, &obs, &z)?;
+            gain = Some(if c.applied {
+                gain_diagonal(&obs, &belief)
+            } else {
+                [0.0, 0.0]
+            });
             innovation = Some([c.innovation[0], c.innovation[1]]);
             nis = Some(c.nis);
             applied = c.applied;
@@ -741,6 +779,7 @@ pub fn run_square(
             innovation,
             nis,
             applied,
+            gain,
             nees: n,
         };
         tally.push(&record.sample());

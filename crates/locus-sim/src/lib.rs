@@ -10,6 +10,7 @@
 #![forbid(unsafe_code)]
 
 pub mod closed_loop;
+pub mod guide;
 pub mod robot;
 pub mod scenario;
 pub mod scenario_file;

@@ -364,3 +364,23 @@ fn run_writes_the_pictures_as_png_and_svg() {
     let _ = std::fs::remove_dir_all(&dir);
     let _ = std::fs::remove_dir_all(&bare);
 }
+
+/// `locus guide` prints the steps a-f with a verdict each and its exit
+/// code says whether every step passed (step e fails its RMSE criterion,
+/// see the README).
+#[test]
+fn guide_prints_every_step_and_exits_with_the_verdict() {
+    let out = locus(&["guide", "--seed", "1"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    for step in ["a)", "b)", "c)", "d)", "e)", "f)"] {
+        assert!(stdout.contains(step), "{step} missing:\n{stdout}");
+    }
+    let fails = stdout.matches("FAIL").count();
+    assert_eq!(out.status.success(), fails == 0, "{stdout}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        stderr.contains("failed their criterion"),
+        fails > 0,
+        "{stderr}"
+    );
+}
