@@ -28,10 +28,11 @@ enum Command {
     /// with odometry alone (a small built-in example until the simulator lands).
     Demo(demo::DemoArgs),
     /// Run a closed-loop scenario of the simulator (controller, encoders, IR
-    /// pair, EKF against odometry alone): prints a summary table and writes
-    /// `log.csv` (as the run goes) and `metrics.json`; with `--runs N`, a
-    /// Monte Carlo over N seeds in parallel (table, `runs.csv`,
-    /// `metrics.json`, no step log).
+    /// pair, EKF against odometry alone), built-in or from a TOML scenario
+    /// file: prints a summary table and writes `log.csv` (as the run goes),
+    /// `metrics.json` and pictures (map, errors, covariance as PNG and SVG);
+    /// with `--runs N`, a Monte Carlo over N seeds in parallel (table,
+    /// `runs.csv`, `metrics.json`, no step log).
     Run(run::RunArgs),
     /// Paper 001's guided experiment, steps a) to f): odometry only, noise-free
     /// IR with tiny R, noisy IR with tiny R, tiny Q, huge Q, tuned Q and R.

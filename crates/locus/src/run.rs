@@ -1,6 +1,7 @@
-//! `locus run [SCENARIO]`: a closed-loop scenario of the simulator, its
-//! summary table, a per-step CSV log written as the run goes, and
-//! `metrics.json`; with `--runs N > 1`, a Monte Carlo over `N` seeds run in
+//! `locus run [SCENARIO|FILE]`: a closed-loop scenario of the simulator
+//! (built-in or a TOML scenario file, `locus_sim::scenario_file`), its
+//! summary table, a per-step CSV log written as the run goes,
+//! `metrics.json` and pictures (`crate::plot`); with `--runs N > 1`, a Monte Carlo over `N` seeds run in
 //! parallel (`rayon`), its summary table, per-run metrics in `runs.csv` and
 //! aggregate metrics in `metrics.json` (no step logs).
 //!
