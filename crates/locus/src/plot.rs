@@ -33,8 +33,8 @@ const MAP_SIDE: u32 = 800;
 /// evenly; the SVGs stay small).
 const MAX_POINTS: usize = 2000;
 
-/// Covariance ellipses on the map are drawn at this many standard
-/// deviations.
+/// Default level of the covariance ellipses on the map (standard
+/// deviations).
 pub const ELLIPSE_SIGMA: f64 = 3.0;
 
 /// Simulated time between two covariance ellipses on the map (s).
@@ -98,6 +98,7 @@ fn draw_map<DB: DrawingBackend>(
     samples: &[Sample],
     walls: &[Segment<f64>],
     title: &str,
+    sigma: f64,
 ) -> Result<()> {
     root.fill(&WHITE).map_err(err)?;
     let mut xs: Vec<f64> = Vec::new();
@@ -196,14 +197,14 @@ fn draw_map<DB: DrawingBackend>(
                 p[0][0],
                 p[0][1],
                 p[1][1],
-                ELLIPSE_SIGMA,
+                sigma,
             ));
             next = s.time + ELLIPSE_EVERY;
         }
     }
     let label = format!(
-        "{ELLIPSE_SIGMA:.0}-sigma ellipse of x-y (every {ELLIPSE_EVERY:.0} s, true scale), {:.1} %",
-        100.0 * ellipse_probability(ELLIPSE_SIGMA)
+        "{sigma}-sigma ellipse of x-y (every {ELLIPSE_EVERY:.0} s, true scale), {:.1} %",
+        100.0 * ellipse_probability(sigma)
     );
     chart
         .draw_series(
@@ -401,8 +402,9 @@ fn draw_covariance<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Writes `map`, `errors` and `covariance` as `.png` and `.svg` into `dir`;
-/// returns the paths written.
+/// Writes `map` (ellipses at `ellipse_sigma` standard deviations),
+/// `errors` and `covariance` as `.png` and `.svg` into `dir`; returns the
+/// paths written.
 ///
 /// # Errors
 /// No samples, or a picture that cannot be drawn or written.
@@ -411,9 +413,13 @@ pub fn write_all(
     samples: &[Sample],
     walls: &[Segment<f64>],
     title: &str,
+    ellipse_sigma: f64,
 ) -> Result<Vec<PathBuf>> {
     if samples.is_empty() {
         return Err(anyhow!("no steps to plot"));
+    }
+    if !(ellipse_sigma.is_finite() && ellipse_sigma > 0.0) {
+        return Err(anyhow!("the ellipse level must be finite and > 0 sigma"));
     }
     register_font()?;
     let mut written = Vec::new();
@@ -431,6 +437,7 @@ pub fn write_all(
                 samples,
                 walls,
                 &map_title,
+                ellipse_sigma,
             )
         } else {
             draw_map(
@@ -438,6 +445,7 @@ pub fn write_all(
                 samples,
                 walls,
                 &map_title,
+                ellipse_sigma,
             )
         }
         .with_context(|| format!("writing {}", map.display()))?;

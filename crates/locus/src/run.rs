@@ -72,6 +72,12 @@ pub struct RunArgs {
     /// bands; the variances over time (log scale).
     #[arg(long)]
     no_plots: bool,
+    /// Level of the covariance ellipses on the map, in standard deviations
+    /// (positive). The legend gives the probability a 2-D Gaussian falls inside,
+    /// 1 - exp(-k^2/2): 39.3 % at 1 sigma (not 68.3 %), 68.3 % at 1.515,
+    /// 98.9 % at 3.
+    #[arg(long, default_value_t = crate::plot::ELLIPSE_SIGMA)]
+    ellipse_sigma: f64,
 }
 
 /// Simulated-time limit per lap when `--laps` is given (s).
@@ -230,7 +236,7 @@ where
         Vec::new()
     } else {
         let title = format!("locus run {}, seed {}", info.name, args.seed);
-        crate::plot::write_all(out, &samples, &info.walls, &title)?
+        crate::plot::write_all(out, &samples, &info.walls, &title, args.ellipse_sigma)?
     };
 
     let mut text = summary_text(args, info, &summary);

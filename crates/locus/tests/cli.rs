@@ -345,6 +345,25 @@ fn run_writes_the_pictures_as_png_and_svg() {
     assert!(svg.contains("3-sigma ellipse"), "ellipse label");
     assert!(svg.contains("98.9 %"), "ellipse probability");
 
+    // The ellipse level is a setting, labelled with its 2-D probability.
+    let out = locus(&[
+        "run",
+        "--laps",
+        "1",
+        "--ellipse-sigma",
+        "1",
+        "--out",
+        dir.to_str().expect("utf-8"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = std::fs::read_to_string(dir.join("map.svg")).expect("svg");
+    assert!(svg.contains("1-sigma ellipse"), "ellipse label");
+    assert!(svg.contains("39.3 %"), "1-sigma ellipse probability");
+
     let bare = temp_dir("no-pictures");
     let out = locus(&[
         "run",
