@@ -3,9 +3,9 @@
 //! Steps a-d and f meet their criteria on all 21 seeds. Step e meets its
 //! gain criterion (the filter jumps to each measurement) but not the
 //! spec's "RMSE within 20 % of c's": with Q large enough for a position
-//! gain >= 0.9, the huge cross-covariances also move the along-wall
-//! coordinate and e's RMSE is 70-155 % above c's (measured, README). The
-//! test pins that: if e ever came within 20 % of c, the README is wrong.
+//! gain >= 0.9, e's RMSE is 70-155 % above c's (measured, see the README).
+//! The test pins that: if e ever came within 20 % of c, the README is
+//! wrong.
 
 use locus_sim::guide::run_guide;
 
