@@ -39,11 +39,9 @@
 //! All randomness comes from one `StdRng` seeded with the run's seed, so a
 //! run is reproducible from `(config, seed)` (wall-clock timing aside).
 
-use std::time::Instant;
-
 use locus_control::{Controller, FollowPath, wheel_speeds};
 use locus_core::nalgebra::{Matrix3, Vector2, Vector3};
-use locus_core::{Belief, ChiSquareGate, Ekf, MeasurementModel, MotionModel, chi2, wrap_angle};
+use locus_core::{Belief, ChiSquareGate, Ekf, MeasurementModel, MotionModel, wrap_angle};
 use locus_models::{DiffDrive, IrPair, IrPairObservation, WheelTravel, associate_ir_wall};
 use locus_odometry::{Wheel as EncoderWheel, wrapping_diff};
 use rand::SeedableRng;
@@ -51,6 +49,7 @@ use rand::rngs::StdRng;
 use rand_distr::{Distribution, StandardNormal};
 
 use crate::robot::{Command, Kinematics, Pose, Robot, RobotError, SlipSchedule, Wheel};
+use crate::scenario::{Record, Sample, Summary, Tally};
 use crate::sensors::{Encoder, IrPairSensor, SensorError, SharpIr};
 use crate::world::World;
 
@@ -65,6 +64,15 @@ pub enum Error {
     /// A configuration value is invalid; the message names it.
     #[error("invalid configuration: {0}")]
     Config(&'static str),
+    /// A configuration field is out of its domain.
+    #[error("invalid configuration: `{field}` {reason}")]
+    Invalid {
+        /// The field's name as in a scenario file (`control.v_ref` for a
+        /// nested one).
+        field: &'static str,
+        /// What the field must be.
+        reason: &'static str,
+    },
     /// The simulated robot rejected a command.
     #[error("robot: {0}")]
     Robot(#[from] RobotError),
@@ -76,8 +84,10 @@ pub enum Error {
     Filter(#[from] locus_core::Error),
 }
 
-/// How the simulated noise is generated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// How the simulated noise is generated (`"realistic"` or `"ideal"` in a
+/// scenario file).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum NoiseModel {
     /// The `square` scenario: exact-arc robot with slip bumps, quantised
     /// encoders with a calibration error, IR readings through the sensor
@@ -92,7 +102,12 @@ pub enum NoiseModel {
 /// Configuration of the `square` scenario. Every value is SI (m, s, rad);
 /// variances are per filter step. See [`SquareConfig::default`] for the
 /// \[assumed\] values of spec section 3.
-#[derive(Debug, Clone, Copy, PartialEq)]
+///
+/// In a scenario file (TOML) every field is optional and overrides the
+/// default; `gate_confidence = "none"` turns the gate off, `[control]`
+/// holds the controller's fields.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct SquareConfig {
     /// Filter, controller and simulation step `dt` (s). Default 0.01 s (100 Hz).
     pub dt: f64,
@@ -131,8 +146,13 @@ pub struct SquareConfig {
     pub initial_std: [f64; 3],
     /// IR pair spacing `L` (m). Default 0.10 m.
     pub ir_spacing: f64,
-    /// IR distance noise standard deviation (m). Default 0.005 m.
+    /// IR distance noise standard deviation (m, >= 0; 0: noise-free
+    /// readings). Default 0.005 m.
     pub ir_sigma: f64,
+    /// Whether the EKF uses the IR readings. `false`: odometry only (the
+    /// readings are still simulated, so the random draws stay those of a
+    /// run with IR, but never reach the filter). Default `true`.
+    pub use_ir: bool,
     /// Largest estimated pair-to-wall distance accepted by the data
     /// association (m): the 0.30 m range plus a margin. Default 0.40 m.
     pub association_range: f64,
@@ -149,12 +169,63 @@ pub struct SquareConfig {
     pub r22: f64,
     /// Confidence of the chi-square gate on the NIS (`None`: no gate).
     /// Default 0.99.
+    #[serde(with = "gate_serde")]
     pub gate_confidence: Option<f64>,
     /// Path controller parameters (`V_ref` 0.1 m/s, ...).
+    #[serde(with = "ControlDef")]
     pub control: locus_control::Config,
     /// How the simulated noise is generated. Default
     /// [`NoiseModel::Realistic`].
     pub noise: NoiseModel,
+}
+
+/// Serde mirror of [`locus_control::Config`] (the `[control]` table of a
+/// scenario file; fields and units as there).
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(
+    remote = "locus_control::Config",
+    default = "locus_control::Config::default",
+    deny_unknown_fields
+)]
+struct ControlDef {
+    v_ref: f64,
+    w_ref: f64,
+    k_cross: f64,
+    k_heading: f64,
+    k_pos: f64,
+    pos_tol: f64,
+    heading_tol: f64,
+}
+
+/// `gate_confidence`: a number in (0, 1), or the string `"none"` for no
+/// gate.
+mod gate_serde {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Gate {
+        Confidence(f64),
+        Word(String),
+    }
+
+    #[allow(clippy::ref_option)]
+    pub(super) fn serialize<S: Serializer>(v: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+        match v {
+            Some(c) => s.serialize_f64(*c),
+            None => s.serialize_str("none"),
+        }
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+        match Gate::deserialize(d) {
+            Ok(Gate::Confidence(c)) => Ok(Some(c)),
+            Ok(Gate::Word(w)) if w == "none" => Ok(None),
+            _ => Err(serde::de::Error::custom(
+                "expected a confidence in (0, 1) or \"none\"",
+            )),
+        }
+    }
 }
 
 impl Default for SquareConfig {
@@ -179,6 +250,7 @@ impl Default for SquareConfig {
             initial_std: [0.01, 0.01, 0.02],
             ir_spacing: 0.10,
             ir_sigma: 0.005,
+            use_ir: true,
             association_range: 0.40,
             q11: 0.5e-3 * 0.5e-3,
             q22: 1e-3 * 1e-3,
@@ -210,49 +282,94 @@ impl SquareConfig {
     /// `Ok(())` if every value is in its domain.
     ///
     /// # Errors
-    /// [`Error::Config`] naming the first bad value.
+    /// [`Error::Invalid`] naming the first bad field (as in a scenario
+    /// file).
     pub fn validate(&self) -> Result<(), Error> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
-        let checks: [(bool, &'static str); 12] = [
-            (pos(self.dt), "dt must be finite and > 0"),
-            (self.laps > 0, "laps must be >= 1"),
-            (pos(self.max_time), "max_time must be finite and > 0"),
-            (pos(self.wheelbase), "wheelbase must be finite and > 0"),
+        let range = |r: (f64, f64)| r.0.is_finite() && r.1.is_finite() && r.0 <= r.1;
+        let c = &self.control;
+        let checks: [(bool, &'static str, &'static str); 23] = [
+            (pos(self.dt), "dt", "must be finite and > 0 s"),
+            (self.laps > 0, "laps", "must be >= 1"),
+            (pos(self.max_time), "max_time", "must be finite and > 0 s"),
+            (pos(self.wheelbase), "wheelbase", "must be finite and > 0 m"),
             (
                 pos(self.wheel_radius),
-                "wheel_radius must be finite and > 0",
+                "wheel_radius",
+                "must be finite and > 0 m",
+            ),
+            (self.encoder_lines > 0, "encoder_lines", "must be >= 1"),
+            (
+                pos(self.encoder_gear),
+                "encoder_gear",
+                "must be finite and > 0",
             ),
             (
                 self.right_scale_error.is_finite() && self.right_scale_error > -1.0,
-                "right_scale_error must be finite and > -1",
+                "right_scale_error",
+                "must be finite and > -1",
+            ),
+            (
+                range(self.slip_length) && self.slip_length.0 >= 0.0,
+                "slip_length",
+                "must be [min, max] with 0 <= min <= max (m)",
+            ),
+            (
+                range(self.slip_scale) && self.slip_scale.0 > 0.0,
+                "slip_scale",
+                "must be [min, max] with 0 < min <= max",
             ),
             (
                 self.start.iter().all(|v| v.is_finite()),
-                "start must be finite",
+                "start",
+                "must be finite",
             ),
             (
                 self.initial_std.iter().all(|v| pos(*v)),
-                "initial_std must be finite and > 0",
-            ),
-            (pos(self.association_range), "association_range must be > 0"),
-            (
-                pos(self.q11) && pos(self.q22),
-                "Q11, Q22 must be finite and > 0",
+                "initial_std",
+                "must be finite and > 0",
             ),
             (
-                pos(self.r11) && pos(self.r22),
-                "R11, R22 must be finite and > 0",
+                pos(self.ir_spacing),
+                "ir_spacing",
+                "must be finite and > 0 m",
             ),
             (
-                self.slip_length.0.is_finite()
-                    && self.slip_length.1.is_finite()
-                    && self.slip_scale.0.is_finite()
-                    && self.slip_scale.1.is_finite(),
-                "slip ranges must be finite",
+                self.ir_sigma.is_finite() && self.ir_sigma >= 0.0,
+                "ir_sigma",
+                "must be finite and >= 0 m",
+            ),
+            (
+                pos(self.association_range),
+                "association_range",
+                "must be finite and > 0 m",
+            ),
+            (pos(self.q11), "q11", "must be finite and > 0 m^2"),
+            (pos(self.q22), "q22", "must be finite and > 0 rad^2"),
+            (pos(self.r11), "r11", "must be finite and > 0 m^2"),
+            (pos(self.r22), "r22", "must be finite and > 0 m^2"),
+            (
+                self.gate_confidence
+                    .is_none_or(|g| g.is_finite() && g > 0.0 && g < 1.0),
+                "gate_confidence",
+                "must be in (0, 1) or \"none\"",
+            ),
+            (pos(c.v_ref), "control.v_ref", "must be finite and > 0 m/s"),
+            (
+                pos(c.w_ref),
+                "control.w_ref",
+                "must be finite and > 0 rad/s",
+            ),
+            (
+                [c.k_cross, c.k_heading, c.k_pos, c.pos_tol, c.heading_tol]
+                    .iter()
+                    .all(|v| pos(*v)),
+                "control",
+                "gains and tolerances must be finite and > 0",
             ),
         ];
-        match checks.iter().find(|(ok, _)| !ok) {
-            Some((_, msg)) => Err(Error::Config(msg)),
+        match checks.iter().find(|(ok, _, _)| !ok) {
+            Some(&(_, field, reason)) => Err(Error::Invalid { field, reason }),
             None => Ok(()),
         }
     }
@@ -269,8 +386,8 @@ pub struct StepRecord {
     pub truth: Pose,
     /// EKF estimate `[x, y, theta]` (m, m, rad).
     pub ekf: [f64; 3],
-    /// EKF covariance `[P_xx, P_yy, P_thth, P_xy]` (m^2, m^2, rad^2, m^2).
-    pub ekf_p: [f64; 4],
+    /// EKF covariance of `[x, y, theta]` (m^2, m rad, rad^2), symmetric.
+    pub ekf_cov: [[f64; 3]; 3],
     /// Odometry-only estimate `[x, y, theta]` (m, m, rad).
     pub odometry: [f64; 3],
     /// Wheel travels from the encoders `[d1 (right), d2 (left)]` (m).
@@ -284,13 +401,19 @@ pub struct StepRecord {
     pub nis: Option<f64>,
     /// Whether the correction was applied (passed the gate).
     pub applied: bool,
+    /// Diagonal of `H K` (K the Kalman gain) when a reading was associated:
+    /// the share of the position innovation moved into the measured
+    /// position coordinate and of the heading innovation into the heading
+    /// (0: measurement ignored, 1: taken as is). `[0, 0]` if the gate
+    /// rejected the correction.
+    pub gain: Option<[f64; 2]>,
     /// NEES of the EKF after the step (3 dof, heading error wrapped).
     pub nees: f64,
 }
 
 impl StepRecord {
     /// Column names of [`StepRecord::csv_row`], units in brackets.
-    pub const CSV_COLUMNS: [&'static str; 22] = [
+    pub const CSV_COLUMNS: [&'static str; 24] = [
         "step",
         "time[s]",
         "true_x[m]",
@@ -313,15 +436,19 @@ impl StepRecord {
         "nis",
         "applied",
         "nees",
+        "gain_pos",
+        "gain_theta",
     ];
+}
 
-    /// The CSV header line (no newline).
-    pub fn csv_header() -> String {
+impl Record for StepRecord {
+    /// The CSV header line (no newline): [`StepRecord::CSV_COLUMNS`].
+    fn csv_header() -> String {
         Self::CSV_COLUMNS.join(",")
     }
 
     /// The record as one CSV line (no newline); absent values are empty.
-    pub fn csv_row(&self) -> String {
+    fn csv_row(&self) -> String {
         fn opt(v: Option<f64>) -> String {
             v.map_or_else(String::new, |v| format!("{v:.9}"))
         }
@@ -336,10 +463,10 @@ impl StepRecord {
             f(self.ekf[0]),
             f(self.ekf[1]),
             f(self.ekf[2]),
-            format!("{:.6e}", self.ekf_p[0]),
-            format!("{:.6e}", self.ekf_p[1]),
-            format!("{:.6e}", self.ekf_p[2]),
-            format!("{:.6e}", self.ekf_p[3]),
+            format!("{:.6e}", self.ekf_cov[0][0]),
+            format!("{:.6e}", self.ekf_cov[1][1]),
+            format!("{:.6e}", self.ekf_cov[2][2]),
+            format!("{:.6e}", self.ekf_cov[0][1]),
             f(self.odometry[0]),
             f(self.odometry[1]),
             f(self.odometry[2]),
@@ -350,61 +477,33 @@ impl StepRecord {
             opt(self.nis),
             u8::from(self.applied).to_string(),
             format!("{:.6}", self.nees),
+            opt(self.gain.map(|g| g[0])),
+            opt(self.gain.map(|g| g[1])),
         ];
         fields.join(",")
     }
-}
 
-/// Summary of a closed-loop run. Errors are against the true pose.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Summary {
-    /// Steps simulated.
-    pub steps: usize,
-    /// Simulated time (s).
-    pub sim_time: f64,
-    /// Laps of the square completed.
-    pub laps_completed: usize,
-    /// EKF position RMSE (m).
-    pub ekf_position_rmse: f64,
-    /// EKF heading RMSE (rad, wrapped errors).
-    pub ekf_heading_rmse: f64,
-    /// EKF largest position error (m).
-    pub ekf_max_position_error: f64,
-    /// Odometry-only position RMSE (m).
-    pub odometry_position_rmse: f64,
-    /// Odometry-only heading RMSE (rad).
-    pub odometry_heading_rmse: f64,
-    /// Odometry-only largest position error (m).
-    pub odometry_max_position_error: f64,
-    /// Mean NEES of the EKF (3 dof; 3 for a consistent filter).
-    pub mean_nees: f64,
-    /// Share of steps whose NEES lies in the two-sided 95 % chi-square(3)
-    /// interval (0.95 for a consistent filter).
-    pub nees_in_interval: f64,
-    /// Steps with both IR sensors in range.
-    pub readings: usize,
-    /// Readings associated with a wall (the others were dropped).
-    pub associated: usize,
-    /// Associated readings whose correction passed the gate and was applied.
-    pub corrections: usize,
-    /// Share of associated readings applied (`corrections / associated`; 0
-    /// when nothing was associated).
-    pub acceptance: f64,
-    /// Wall-clock duration of the run (s), including the sink's time. Not
-    /// reproducible.
-    pub wall_clock: f64,
-    /// Simulated time over wall-clock time. Not reproducible.
-    pub real_time_factor: f64,
-}
-
-impl Summary {
-    /// The same summary with the wall-clock fields zeroed, for comparing
-    /// runs.
-    #[must_use]
-    pub fn without_timing(mut self) -> Self {
-        self.wall_clock = 0.0;
-        self.real_time_factor = 0.0;
-        self
+    fn sample(&self) -> Sample {
+        let t = &self.truth;
+        Sample {
+            step: self.step,
+            time: self.time,
+            truth: [t.x, t.y, 0.0],
+            truth_heading: t.theta,
+            estimate: [self.ekf[0], self.ekf[1], 0.0],
+            estimate_heading: self.ekf[2],
+            heading_error: wrap_angle(t.theta - self.ekf[2]),
+            covariance: self.ekf_cov,
+            var_z: 0.0,
+            odometry: Some((
+                [self.odometry[0], self.odometry[1], 0.0],
+                wrap_angle(t.theta - self.odometry[2]),
+            )),
+            nees: self.nees,
+            nees_dof: 3,
+            correction: self.nis.map(|nis| (nis, 2, self.applied)),
+            measured: self.ir.is_some(),
+        }
     }
 }
 
@@ -418,16 +517,22 @@ fn nees(x: &Vector3<f64>, p: &Matrix3<f64>, truth: &Pose) -> f64 {
     p.cholesky().map_or(f64::INFINITY, |c| e.dot(&c.solve(&e)))
 }
 
+/// Diagonal of `H K = H P H^T S^-1` at the prior `belief` for `obs`
+/// (`S = H P H^T + V R V^T`); `[0, 0]` if `S` is singular.
+fn gain_diagonal(obs: &IrPairObservation<f64>, belief: &Belief<f64, 3>) -> [f64; 2] {
+    let h = obs.jacobian(&belief.x);
+    let hph = h * belief.p * h.transpose();
+    let s = hph + obs.noise(&belief.x);
+    s.try_inverse().map_or([0.0, 0.0], |si| {
+        let hk = hph * si;
+        [hk[(0, 0)], hk[(1, 1)]]
+    })
+}
+
 /// A draw from `N(0, std^2)`.
 fn gauss(rng: &mut StdRng, std: f64) -> f64 {
     let n: f64 = StandardNormal.sample(rng);
     std * n
-}
-
-/// Squared position error and wrapped heading error of `x` against `truth`.
-fn errors(x: &Vector3<f64>, truth: &Pose) -> (f64, f64) {
-    let (dx, dy) = (truth.x - x[0], truth.y - x[1]);
-    (dx * dx + dy * dy, wrap_angle(truth.theta - x[2]))
 }
 
 /// An ideal-mode observation and its `z` (m, rad).
@@ -479,7 +584,8 @@ fn ideal_observation(
 }
 
 /// Runs the `square` scenario with `cfg` from `seed`, calling `sink` with
-/// every step's record as the run goes, and returns the summary.
+/// every step's record as the run goes, and returns the summary (a
+/// [`Tally`] of every step's [`Record::sample`]).
 ///
 /// # Errors
 /// [`Error::Config`] for an invalid configuration; a robot, sensor or
@@ -491,7 +597,7 @@ pub fn run_square(
     sink: &mut impl FnMut(&StepRecord),
 ) -> Result<Summary, Error> {
     cfg.validate()?;
-    let started = Instant::now();
+    let mut tally = Tally::new(3)?;
     let mut rng = StdRng::seed_from_u64(seed);
     let world = World::square_arena();
 
@@ -558,15 +664,9 @@ pub fn run_square(
     let q_std = [cfg.q11.sqrt(), cfg.q22.sqrt()];
 
     let mut controller = FollowPath::square(cfg.control);
-    let nees_lo = chi2::quantile(0.025, 3)?;
-    let nees_hi = chi2::quantile(0.975, 3)?;
 
     let max_steps = (cfg.max_time / cfg.dt).ceil() as usize;
     let mut laps = 0usize;
-    let (mut sq_pos, mut sq_th, mut max_pos) = (0.0, 0.0, 0.0f64);
-    let (mut odo_sq_pos, mut odo_sq_th, mut odo_max_pos) = (0.0, 0.0, 0.0f64);
-    let (mut nees_sum, mut nees_in) = (0.0, 0usize);
-    let (mut readings, mut associated, mut corrections) = (0usize, 0usize, 0usize);
     let mut steps = 0usize;
 
     while steps < max_steps {
@@ -617,7 +717,7 @@ pub fn run_square(
         belief = ekf.predict(&belief, &model, &u)?;
         odo = ekf.predict(&odo, &model, &u)?;
 
-        let (mut innovation, mut nis, mut applied) = (None, None, false);
+        let (mut innovation, mut nis, mut applied, mut gain) = (None, None, false, None);
         // The raw readings (for the log) and, if associated, the observation.
         let (reading, observation) = if ideal {
             let r_std = [cfg.r11.sqrt(), cfg.r22.sqrt()];
@@ -646,77 +746,45 @@ pub fn run_square(
             });
             (reading, observation)
         };
-        readings += usize::from(reading.is_some());
+        let observation = observation.filter(|_| cfg.use_ir);
         if let Some((obs, z)) = observation {
-            associated += 1;
             let c = ekf.correct(&belief, &obs, &z)?;
+            gain = Some(if c.applied {
+                gain_diagonal(&obs, &belief)
+            } else {
+                [0.0, 0.0]
+            });
             innovation = Some([c.innovation[0], c.innovation[1]]);
             nis = Some(c.nis);
             applied = c.applied;
-            corrections += usize::from(c.applied);
             belief = c.belief;
         }
 
         let n = nees(&belief.x, &belief.p, &truth);
-        nees_sum += n;
-        if (nees_lo..=nees_hi).contains(&n) {
-            nees_in += 1;
-        }
-        let (e2, eth) = errors(&belief.x, &truth);
-        sq_pos += e2;
-        sq_th += eth * eth;
-        max_pos = max_pos.max(e2.sqrt());
-        let (o2, oth) = errors(&odo.x, &truth);
-        odo_sq_pos += o2;
-        odo_sq_th += oth * oth;
-        odo_max_pos = odo_max_pos.max(o2.sqrt());
-
         steps += 1;
         let p = &belief.p;
-        sink(&StepRecord {
+        let record = StepRecord {
             step: steps - 1,
             time: steps as f64 * cfg.dt,
             truth,
             ekf: [belief.x[0], belief.x[1], belief.x[2]],
-            ekf_p: [p[(0, 0)], p[(1, 1)], p[(2, 2)], p[(0, 1)]],
+            ekf_cov: [
+                [p[(0, 0)], p[(0, 1)], p[(0, 2)]],
+                [p[(1, 0)], p[(1, 1)], p[(1, 2)]],
+                [p[(2, 0)], p[(2, 1)], p[(2, 2)]],
+            ],
             odometry: [odo.x[0], odo.x[1], odo.x[2]],
             wheel_travel: [u.d1, u.d2],
             ir: reading,
             innovation,
             nis,
             applied,
+            gain,
             nees: n,
-        });
+        };
+        tally.push(&record.sample());
+        sink(&record);
     }
 
-    let n = steps.max(1) as f64;
-    let sim_time = steps as f64 * cfg.dt;
-    let wall_clock = started.elapsed().as_secs_f64();
-    Ok(Summary {
-        steps,
-        sim_time,
-        laps_completed: laps,
-        ekf_position_rmse: (sq_pos / n).sqrt(),
-        ekf_heading_rmse: (sq_th / n).sqrt(),
-        ekf_max_position_error: max_pos,
-        odometry_position_rmse: (odo_sq_pos / n).sqrt(),
-        odometry_heading_rmse: (odo_sq_th / n).sqrt(),
-        odometry_max_position_error: odo_max_pos,
-        mean_nees: nees_sum / n,
-        nees_in_interval: nees_in as f64 / n,
-        readings,
-        associated,
-        corrections,
-        acceptance: if associated > 0 {
-            corrections as f64 / associated as f64
-        } else {
-            0.0
-        },
-        wall_clock,
-        real_time_factor: if wall_clock > 0.0 {
-            sim_time / wall_clock
-        } else {
-            f64::INFINITY
-        },
-    })
+    Ok(tally.summary(laps))
 }

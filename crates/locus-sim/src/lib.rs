@@ -10,15 +10,18 @@
 #![forbid(unsafe_code)]
 
 pub mod closed_loop;
+pub mod guide;
 pub mod hover;
 pub mod robot;
 pub mod scenario;
+pub mod scenario_file;
 pub mod sensors;
 pub mod tricycle_slip;
 pub mod wall45;
 pub mod world;
 
-pub use closed_loop::{SquareConfig, StepRecord, Summary, run_square};
+pub use closed_loop::{SquareConfig, StepRecord, run_square};
 pub use robot::{Command, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, WheelTravel};
+pub use scenario::{Record, Sample, Summary, Tally};
 pub use sensors::{Encoder, IrPairSensor, Laser, SensorError, SharpIr};
 pub use world::{Hit, World};

@@ -138,18 +138,18 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         format!("{:.2}", rmse(1, 2).to_degrees()),
         "-".to_string(),
     ]);
-    println!(
-        "locus demo: paper 001, one leg along wall x+ ({} steps of {DT} s, seed {})",
-        args.steps, args.seed
-    );
-    println!("{table}");
-    println!(
-        "IR observations: {observations}, applied {applied}, gated out {gated} (chi-square 99.9 %)"
-    );
     let nis = monitor.assess();
-    println!(
-        "NIS consistency (last {} corrections): mean {:.2} (95 % bounds {:.2}..{:.2} for dof {:.0}): {}",
-        nis.samples, nis.mean_nis, nis.lower, nis.upper, nis.mean_dof, nis.verdict
-    );
-    Ok(())
+    crate::output::print_out(&format!(
+        "locus demo: paper 001, one leg along wall x+ ({} steps of {DT} s, seed {})\n{table}\n\
+         IR observations: {observations}, applied {applied}, gated out {gated} (chi-square 99.9 %)\n\
+         NIS consistency (last {} corrections): mean {:.2} (95 % bounds {:.2}..{:.2} for dof {:.0}): {}\n",
+        args.steps,
+        args.seed,
+        nis.samples,
+        nis.mean_nis,
+        nis.lower,
+        nis.upper,
+        nis.mean_dof,
+        nis.verdict
+    ))
 }

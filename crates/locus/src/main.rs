@@ -4,6 +4,9 @@
 //! `locus-core` (the filter) and `locus-models` (the papers' models).
 
 mod demo;
+mod guide;
+mod output;
+mod plot;
 mod run;
 
 use std::process::ExitCode;
@@ -25,11 +28,18 @@ enum Command {
     /// with odometry alone (a small built-in example until the simulator lands).
     Demo(demo::DemoArgs),
     /// Run a closed-loop scenario of the simulator (controller, encoders, IR
-    /// pair, EKF against odometry alone): prints a summary table and writes
-    /// `log.csv` (as the run goes) and `metrics.json`; with `--runs N`, a
-    /// Monte Carlo over N seeds in parallel (table, `runs.csv`,
-    /// `metrics.json`, no step log).
+    /// pair, EKF against odometry alone), built-in or from a TOML scenario
+    /// file: prints a summary table and writes `log.csv` (as the run goes),
+    /// `metrics.json` and pictures (map, errors, covariance as PNG and SVG);
+    /// with `--runs N`, a Monte Carlo over N seeds in parallel (table,
+    /// `runs.csv`, `metrics.json`, no step log).
     Run(run::RunArgs),
+    /// Paper 001's guided experiment, steps a) to f): odometry only, noise-free
+    /// IR with tiny R, noisy IR with tiny R, tiny Q, huge Q, tuned Q and R.
+    /// Each step runs the `square` scenario on 10 seeds and is judged on a
+    /// measurable criterion (spec section 3); prints a table with PASS/FAIL
+    /// and exits non-zero if a step fails.
+    Guide(guide::GuideArgs),
 }
 
 fn main() -> ExitCode {
@@ -37,9 +47,12 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Demo(args) => demo::run(&args),
         Command::Run(args) => run::run(&args),
+        Command::Guide(args) => guide::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // `locus run | head`: the reader has gone; nothing left to say.
+        Err(err) if output::is_broken_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("error: {err}");
             for cause in err.chain().skip(1) {

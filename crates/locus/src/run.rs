@@ -1,11 +1,15 @@
-//! `locus run [SCENARIO]`: a closed-loop scenario of the simulator, its
-//! summary table, a per-step CSV log written as the run goes, and
-//! `metrics.json`; with `--runs N > 1`, a Monte Carlo over `N` seeds run in
+//! `locus run [SCENARIO|FILE]`: a closed-loop scenario of the simulator
+//! (built-in or a TOML scenario file, `locus_sim::scenario_file`), its
+//! summary table, a per-step CSV log written as the run goes,
+//! `metrics.json` and pictures (`crate::plot`); with `--runs N > 1`, a Monte Carlo over `N` seeds run in
 //! parallel (`rayon`), its summary table, per-run metrics in `runs.csv` and
 //! aggregate metrics in `metrics.json` (no step logs).
 //!
-//! Only `square` (paper 001: controller, encoders, IR pair, EKF on the 1 m
-//! arena, see `locus_sim::closed_loop`) exists so far.
+//! Everything after the choice of the scenario is generic over the
+//! scenario's record type ([`Record`]): [`execute`] takes a runner closure
+//! of the shape of every `locus_sim` scenario runner
+//! (`run_X(&cfg, seed, &mut sink) -> Result<Summary, Error>`). Adding a
+//! scenario is one arm in [`run`]'s dispatch plus its [`Info`].
 
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};
@@ -14,13 +18,12 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use comfy_table::{Table, presets::UTF8_FULL};
-use locus_sim::closed_loop::{SquareConfig, StepRecord, Summary, run_square};
+use locus_models::laser_wall::Segment;
+use locus_sim::closed_loop::{SquareConfig, run_square};
+use locus_sim::scenario::{Record, Sample, Summary};
+use locus_sim::scenario_file::{self, BUILTIN, ScenarioConfig};
 
-/// The scenarios `locus run` knows: `square` (paper 001's arena with
-/// realistic noise: encoder quantisation, scale error, slip) and
-/// `square-ideal` (the same with noise exactly as the filter's Q and R
-/// assume: no slip, no quantisation, no gate).
-pub const SCENARIOS: [&str; 2] = ["square", "square-ideal"];
+use crate::output::print_out;
 
 /// The CSV writer is flushed every this many steps (and at the end), so a
 /// killed run leaves a readable prefix: `log.csv` is always a prefix of the
@@ -31,10 +34,17 @@ const FLUSH_EVERY: usize = 100;
 /// Arguments of `locus run`.
 #[derive(Args, Debug)]
 pub struct RunArgs {
-    /// Scenario to run: `square` (paper 001, realistic noise) or
-    /// `square-ideal` (noise exactly as the filter assumes).
-    #[arg(default_value = "square")]
+    /// Scenario to run: a built-in name, `square` (paper 001's arena with
+    /// realistic noise: encoder quantisation, scale error, slip) or
+    /// `square-ideal` (noise exactly as the filter's Q and R assume), or a
+    /// scenario file `FILE.toml` whose `scenario = "square"` picks the kind
+    /// and whose other keys override its defaults (see `--print-config`).
+    #[arg(default_value = "square", value_name = "SCENARIO|FILE")]
     scenario: String,
+    /// Print the scenario's complete configuration as a TOML scenario file
+    /// (a template: every key, SI units) and exit without running.
+    #[arg(long)]
+    print_config: bool,
     /// Seed of the random numbers (a run is reproducible from its seed).
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -55,17 +65,47 @@ pub struct RunArgs {
     /// and `metrics.json`.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Do not draw the pictures of a single run. By default one run also
+    /// writes `map`, `errors` and `covariance` as PNG and SVG into the
+    /// output directory: walls with the true, estimated and odometry paths
+    /// and 3-sigma covariance ellipses; x, y, heading errors with +-3 sigma
+    /// bands; the variances over time (log scale).
+    #[arg(long)]
+    no_plots: bool,
+    /// Level of the covariance ellipses on the map, in standard deviations
+    /// (positive). The legend gives the probability a 2-D Gaussian falls inside,
+    /// 1 - exp(-k^2/2): 39.3 % at 1 sigma (not 68.3 %), 68.3 % at 1.515,
+    /// 98.9 % at 3.
+    #[arg(long, default_value_t = crate::plot::ELLIPSE_SIGMA)]
+    ellipse_sigma: f64,
 }
 
 /// Simulated-time limit per lap when `--laps` is given (s).
 const MAX_TIME_PER_LAP: f64 = 300.0;
 
-/// The scenario's configuration with the command-line overrides.
-fn config(args: &RunArgs) -> Result<SquareConfig> {
-    let mut cfg = match args.scenario.as_str() {
-        "square-ideal" => SquareConfig::ideal(),
-        _ => SquareConfig::default(),
-    };
+/// What the summary table and the files say about a scenario, besides its
+/// per-run [`Summary`].
+#[derive(Debug, Clone)]
+pub struct Info {
+    /// Scenario name as given on the command line (e.g. `square`).
+    pub name: String,
+    /// What runs, for the first line of the output (e.g. `paper 001 closed
+    /// loop`).
+    pub title: &'static str,
+    /// Label of the filter's row in the table (e.g. `EKF (odometry + IR)`).
+    pub estimator: &'static str,
+    /// Name of the measurements in the counts row (e.g. `IR`).
+    pub measurement: &'static str,
+    /// Filter step (s).
+    pub dt: f64,
+    /// Laps to drive, for scenarios that drive laps.
+    pub laps: Option<usize>,
+    /// The map's walls (m, world frame), for the pictures.
+    pub walls: Vec<Segment<f64>>,
+}
+
+/// The square scenario's configuration with the command-line overrides.
+fn square_config(args: &RunArgs, mut cfg: SquareConfig) -> Result<SquareConfig> {
     if let Some(laps) = args.laps {
         cfg.laps = usize::try_from(laps).context("--laps too large")?;
         #[allow(clippy::cast_precision_loss)]
@@ -75,75 +115,165 @@ fn config(args: &RunArgs) -> Result<SquareConfig> {
     Ok(cfg)
 }
 
-/// Runs the scenario, writing the log as it goes, then prints the summary.
+/// The [`Info`] of a square scenario.
+fn square_info(name: &str, cfg: &SquareConfig) -> Info {
+    Info {
+        name: name.to_string(),
+        title: "paper 001 closed loop",
+        estimator: "EKF (odometry + IR)",
+        measurement: "IR",
+        dt: cfg.dt,
+        laps: Some(cfg.laps),
+        walls: locus_sim::World::square_arena().walls,
+    }
+}
+
+/// The scenario named on the command line: its name (a built-in name, or
+/// the file's stem) and configuration.
+fn resolve(arg: &str) -> Result<(String, ScenarioConfig)> {
+    if let Some(cfg) = ScenarioConfig::builtin(arg) {
+        return Ok((arg.to_string(), cfg));
+    }
+    let path = Path::new(arg);
+    if path.extension().is_some_and(|e| e == "toml") || path.is_file() {
+        let cfg = scenario_file::load(path)?;
+        let name = path
+            .file_stem()
+            .map_or_else(|| "file".to_string(), |s| s.to_string_lossy().into_owned());
+        return Ok((name, cfg));
+    }
+    bail!(
+        "unknown scenario `{arg}`; supported scenarios: {}, or a scenario file FILE.toml",
+        BUILTIN.join(", ")
+    )
+}
+
+/// Runs the scenario named in `args`, writing the log as it goes, then
+/// prints the summary (or, with `--print-config`, prints its configuration).
 pub fn run(args: &RunArgs) -> Result<()> {
-    if !SCENARIOS.contains(&args.scenario.as_str()) {
-        bail!(
-            "unknown scenario `{}`; supported scenarios: {}",
-            args.scenario,
-            SCENARIOS.join(", ")
-        );
+    let (name, config) = resolve(&args.scenario)?;
+    if args.print_config {
+        let kind = if BUILTIN.contains(&args.scenario.as_str()) {
+            args.scenario.as_str()
+        } else {
+            config.kind()
+        };
+        return print_out(&config.to_toml(kind)?);
     }
     let out = args
         .out
         .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("out/run-{}", args.scenario)));
-    fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-    let cfg = config(args)?;
+        .unwrap_or_else(|| PathBuf::from(format!("out/run-{name}")));
+    // One arm per scenario kind: its command-line overrides, its Info and
+    // its runner.
+    match config {
+        ScenarioConfig::Square(base) => {
+            let cfg = square_config(args, base)?;
+            let info = square_info(&name, &cfg);
+            execute(args, &info, &out, |seed, mut sink| {
+                run_square(&cfg, seed, &mut sink)
+            })
+        }
+    }
+}
+
+/// Runs a scenario given as a runner closure `(seed, sink) -> summary`:
+/// one run (log, metrics, table) or, with `--runs N > 1`, a Monte Carlo.
+///
+/// # Errors
+/// Files that cannot be written, a failed run, standard output closed.
+pub fn execute<R, E, F>(args: &RunArgs, info: &Info, out: &Path, runner: F) -> Result<()>
+where
+    R: Record,
+    E: core::error::Error + Send + Sync + 'static,
+    F: Fn(u64, &mut dyn FnMut(&R)) -> Result<Summary, E> + Sync,
+{
+    fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     if args.runs > 1 {
-        return monte_carlo(args, &cfg, &out);
+        return monte_carlo(args, info, out, runner);
     }
     let csv_path = out.join("log.csv");
     let file =
         File::create(&csv_path).with_context(|| format!("creating {}", csv_path.display()))?;
     let mut csv = BufWriter::new(file);
-    writeln!(csv, "{}", StepRecord::csv_header())
+    writeln!(csv, "{}", R::csv_header())
         .and_then(|()| csv.flush())
         .with_context(|| format!("writing {}", csv_path.display()))?;
 
     let mut io_error: Option<std::io::Error> = None;
-    let mut sink = |r: &StepRecord| {
+    let mut steps = 0usize;
+    let mut samples: Vec<Sample> = Vec::new();
+    let mut sink = |r: &R| {
+        steps += 1;
+        if !args.no_plots {
+            samples.push(r.sample());
+        }
         if io_error.is_some() {
             return;
         }
         let mut res = writeln!(csv, "{}", r.csv_row());
-        if res.is_ok() && (r.step + 1) % FLUSH_EVERY == 0 {
+        if res.is_ok() && steps % FLUSH_EVERY == 0 {
             res = csv.flush();
         }
         if let Err(e) = res {
             io_error = Some(e);
         }
     };
-    let result = run_square(&cfg, args.seed, &mut sink);
+    let result = runner(args.seed, &mut sink);
     // Flush what was logged even if the run failed.
     let flushed = csv.flush();
     if let Some(e) = io_error {
         return Err(e).with_context(|| format!("writing {}", csv_path.display()));
     }
     flushed.with_context(|| format!("writing {}", csv_path.display()))?;
-    let summary = result.context("square run")?;
+    let summary = result.with_context(|| format!("{} run", info.name))?;
 
     let metrics_path = out.join("metrics.json");
-    fs::write(
-        &metrics_path,
-        metrics_json(&args.scenario, args.seed, &cfg, &summary),
-    )
-    .with_context(|| format!("writing {}", metrics_path.display()))?;
+    fs::write(&metrics_path, metrics_json(info, args.seed, &summary))
+        .with_context(|| format!("writing {}", metrics_path.display()))?;
 
-    print_summary(args, &cfg, &summary, &csv_path, &metrics_path);
-    Ok(())
+    let pictures = if args.no_plots {
+        Vec::new()
+    } else {
+        let title = format!("locus run {}, seed {}", info.name, args.seed);
+        crate::plot::write_all(out, &samples, &info.walls, &title, args.ellipse_sigma)?
+    };
+
+    let mut text = summary_text(args, info, &summary);
+    text.push_str(&format!("log: {}\n", csv_path.display()));
+    text.push_str(&format!("metrics: {}\n", metrics_path.display()));
+    if !pictures.is_empty() {
+        let names: Vec<String> = pictures
+            .iter()
+            .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+            .collect();
+        text.push_str(&format!(
+            "pictures: {} in {}\n",
+            names.join(", "),
+            out.display()
+        ));
+    }
+    print_out(&text)
 }
 
-fn print_summary(
-    args: &RunArgs,
-    cfg: &SquareConfig,
-    s: &Summary,
-    csv_path: &Path,
-    metrics_path: &Path,
-) {
-    println!(
-        "locus run {}: paper 001 closed loop, seed {}, {} steps of {} s ({:.1} s simulated, {} laps)",
-        args.scenario, args.seed, s.steps, cfg.dt, s.sim_time, s.laps_completed
+/// A figure for the table: `scale * v` with `decimals`, or `n/a` when `v`
+/// is NaN (a scenario without that estimator).
+fn fig(v: f64, scale: f64, decimals: usize) -> String {
+    if v.is_nan() {
+        "n/a".to_string()
+    } else {
+        format!("{:.*}", decimals, scale * v)
+    }
+}
+
+/// The single-run summary: first line and the two tables.
+fn summary_text(args: &RunArgs, info: &Info, s: &Summary) -> String {
+    let laps = info
+        .laps
+        .map_or_else(String::new, |_| format!(", {} laps", s.laps_completed));
+    let mut text = format!(
+        "locus run {}: {}, seed {}, {} steps of {} s ({:.1} s simulated{laps})\n",
+        info.name, info.title, args.seed, s.steps, info.dt, s.sim_time
     );
     let mut table = Table::new();
     table.load_preset(UTF8_FULL).set_header(vec![
@@ -152,49 +282,56 @@ fn print_summary(
         "heading RMSE [deg]",
         "max position error [cm]",
     ]);
+    let deg = 180.0 / core::f64::consts::PI;
     table.add_row(vec![
-        "EKF (odometry + IR)".to_string(),
-        format!("{:.2}", 100.0 * s.ekf_position_rmse),
-        format!("{:.2}", s.ekf_heading_rmse.to_degrees()),
-        format!("{:.2}", 100.0 * s.ekf_max_position_error),
+        info.estimator.to_string(),
+        fig(s.ekf_position_rmse, 100.0, 2),
+        fig(s.ekf_heading_rmse, deg, 2),
+        fig(s.ekf_max_position_error, 100.0, 2),
     ]);
     table.add_row(vec![
         "odometry alone".to_string(),
-        format!("{:.2}", 100.0 * s.odometry_position_rmse),
-        format!("{:.2}", s.odometry_heading_rmse.to_degrees()),
-        format!("{:.2}", 100.0 * s.odometry_max_position_error),
+        fig(s.odometry_position_rmse, 100.0, 2),
+        fig(s.odometry_heading_rmse, deg, 2),
+        fig(s.odometry_max_position_error, 100.0, 2),
     ]);
-    println!("{table}");
+    text.push_str(&format!("{table}\n"));
 
     let mut filter = Table::new();
     filter
         .load_preset(UTF8_FULL)
         .set_header(vec!["filter check [unit]", "value"]);
+    let dof = s.nees_dof;
     let rows = [
         (
-            "mean NEES (3 dof, ideal 3) [-]",
-            format!("{:.2}", s.mean_nees),
+            format!("mean NEES ({dof} dof, ideal {dof}) [-]"),
+            fig(s.mean_nees, 1.0, 2),
         ),
         (
-            "steps with NEES in 95 % chi-square(3) interval [%]",
-            format!("{:.1}", 100.0 * s.nees_in_interval),
+            format!("steps with NEES in 95 % chi-square({dof}) interval [%]"),
+            fig(s.nees_in_interval, 100.0, 1),
         ),
         (
-            "IR readings / associated / applied [count]",
+            format!(
+                "{} readings / associated / applied [count]",
+                info.measurement
+            ),
             format!("{} / {} / {}", s.readings, s.associated, s.corrections),
         ),
         (
-            "updates accepted by the gate [%]",
-            format!("{:.1}", 100.0 * s.acceptance),
+            "updates accepted by the gate [%]".to_string(),
+            fig(s.acceptance, 100.0, 1),
         ),
-        ("real-time factor [x]", format!("{:.0}", s.real_time_factor)),
+        (
+            "real-time factor [x]".to_string(),
+            fig(s.real_time_factor, 1.0, 0),
+        ),
     ];
     for (name, value) in rows {
-        filter.add_row(vec![name.to_string(), value]);
+        filter.add_row(vec![name, value]);
     }
-    println!("{filter}");
-    println!("log: {}", csv_path.display());
-    println!("metrics: {}", metrics_path.display());
+    text.push_str(&format!("{filter}\n"));
+    text
 }
 
 /// A JSON number, or `null` when not finite.
@@ -206,13 +343,25 @@ fn num(v: f64) -> String {
     }
 }
 
+/// A JSON string literal (quotes and backslashes escaped).
+fn json_str(v: &str) -> String {
+    format!("\"{}\"", v.replace('\\', "\\\\").replace('"', "\\\""))
+}
+
+/// The settings that open both `metrics.json` files.
+fn settings(info: &Info) -> Vec<(&'static str, String)> {
+    let mut fields = vec![("scenario", json_str(&info.name)), ("dt_s", num(info.dt))];
+    if let Some(laps) = info.laps {
+        fields.push(("laps", laps.to_string()));
+    }
+    fields
+}
+
 /// `metrics.json`: the scenario, seed, main settings and the summary (SI).
-fn metrics_json(scenario: &str, seed: u64, cfg: &SquareConfig, s: &Summary) -> String {
-    let fields: Vec<(&str, String)> = vec![
-        ("scenario", format!("\"{scenario}\"")),
-        ("seed", seed.to_string()),
-        ("dt_s", num(cfg.dt)),
-        ("laps", cfg.laps.to_string()),
+fn metrics_json(info: &Info, seed: u64, s: &Summary) -> String {
+    let mut fields = settings(info);
+    fields.insert(1, ("seed", seed.to_string()));
+    fields.extend([
         ("steps", s.steps.to_string()),
         ("sim_time_s", num(s.sim_time)),
         ("laps_completed", s.laps_completed.to_string()),
@@ -232,8 +381,9 @@ fn metrics_json(scenario: &str, seed: u64, cfg: &SquareConfig, s: &Summary) -> S
         ("corrections", s.corrections.to_string()),
         ("acceptance_share", num(s.acceptance)),
         ("wall_clock_s", num(s.wall_clock)),
+        ("nees_dof", s.nees_dof.to_string()),
         ("real_time_factor", num(s.real_time_factor)),
-    ];
+    ]);
     let body: Vec<String> = fields
         .iter()
         .map(|(k, v)| format!("  \"{k}\": {v}"))
@@ -296,7 +446,7 @@ const METRICS: [Metric; 6] = [
     },
     Metric {
         key: "mean_nees",
-        label: "mean NEES (3 dof, ideal 3) [-]",
+        label: "mean NEES ({dof} dof, ideal {dof}) [-]",
         scale: 1.0,
         get: |s| s.mean_nees,
     },
@@ -311,7 +461,12 @@ const METRICS: [Metric; 6] = [
 /// `--runs N > 1`: the scenario over seeds `seed..seed + N` in parallel,
 /// without step logs; prints the Monte Carlo table, writes `runs.csv` and
 /// `metrics.json`.
-fn monte_carlo(args: &RunArgs, cfg: &SquareConfig, out: &Path) -> Result<()> {
+fn monte_carlo<R, E, F>(args: &RunArgs, info: &Info, out: &Path, runner: F) -> Result<()>
+where
+    R: Record,
+    E: core::error::Error + Send + Sync + 'static,
+    F: Fn(u64, &mut dyn FnMut(&R)) -> Result<Summary, E> + Sync,
+{
     use indicatif::{ProgressBar, ProgressStyle};
     use rayon::prelude::*;
 
@@ -325,10 +480,10 @@ fn monte_carlo(args: &RunArgs, cfg: &SquareConfig, out: &Path) -> Result<()> {
             .context("progress bar template")?,
     );
     let started = std::time::Instant::now();
-    let results: Vec<(u64, Result<Summary, locus_sim::closed_loop::Error>)> = (args.seed..end)
+    let results: Vec<(u64, Result<Summary, E>)> = (args.seed..end)
         .into_par_iter()
         .map(|seed| {
-            let r = run_square(cfg, seed, &mut |_: &StepRecord| {});
+            let r = runner(seed, &mut |_: &R| {});
             bar.inc(1);
             (seed, r)
         })
@@ -337,26 +492,29 @@ fn monte_carlo(args: &RunArgs, cfg: &SquareConfig, out: &Path) -> Result<()> {
     let wall_clock = started.elapsed().as_secs_f64();
     let mut runs = Vec::with_capacity(results.len());
     for (seed, r) in results {
-        runs.push((seed, r.with_context(|| format!("square run, seed {seed}"))?));
+        runs.push((
+            seed,
+            r.with_context(|| format!("{} run, seed {seed}", info.name))?,
+        ));
     }
 
     let runs_path = out.join("runs.csv");
     fs::write(&runs_path, runs_csv(&runs))
         .with_context(|| format!("writing {}", runs_path.display()))?;
     let metrics_path = out.join("metrics.json");
-    fs::write(
-        &metrics_path,
-        monte_carlo_json(&args.scenario, args.seed, cfg, &runs),
-    )
-    .with_context(|| format!("writing {}", metrics_path.display()))?;
+    fs::write(&metrics_path, monte_carlo_json(info, args.seed, &runs))
+        .with_context(|| format!("writing {}", metrics_path.display()))?;
 
-    println!(
-        "locus run {}: paper 001 closed loop, Monte Carlo over {} runs (seeds {}..={}), {} laps each, {:.1} s wall clock",
-        args.scenario,
+    let laps = info
+        .laps
+        .map_or_else(String::new, |l| format!(", {l} laps each"));
+    let mut text = format!(
+        "locus run {}: {}, Monte Carlo over {} runs (seeds {}..={}){laps}, {:.1} s wall clock\n",
+        info.name,
+        info.title,
         runs.len(),
         args.seed,
         end - 1,
-        cfg.laps,
         wall_clock
     );
     let mut table = Table::new();
@@ -367,17 +525,31 @@ fn monte_carlo(args: &RunArgs, cfg: &SquareConfig, out: &Path) -> Result<()> {
         "min",
         "max",
     ]);
+    let dof = runs.first().map_or(0, |(_, s)| s.nees_dof);
     for m in &METRICS {
-        let values: Vec<f64> = runs.iter().map(|(_, s)| m.scale * (m.get)(s)).collect();
-        let mut row = vec![m.label.to_string()];
-        row.extend(stats(&values).iter().map(|v| format!("{v:.2}")));
+        let values: Vec<f64> = runs.iter().map(|(_, s)| (m.get)(s)).collect();
+        let label = m
+            .label
+            .replace("{dof}", &dof.to_string())
+            .replace("{estimator}", info.estimator);
+        let mut row = vec![label];
+        row.extend(stats(&values).iter().map(|v| fig(*v, m.scale, 2)));
         table.add_row(row);
     }
-    println!("{table}");
-    println!("no step logs with --runs > 1");
-    println!("runs: {}", runs_path.display());
-    println!("metrics: {}", metrics_path.display());
-    Ok(())
+    text.push_str(&format!("{table}\n"));
+    text.push_str("no step logs with --runs > 1\n");
+    text.push_str(&format!("runs: {}\n", runs_path.display()));
+    text.push_str(&format!("metrics: {}\n", metrics_path.display()));
+    print_out(&text)
+}
+
+/// A CSV field with 9 decimals, empty when not finite (no odometry).
+fn csv_num(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.9}")
+    } else {
+        String::new()
+    }
 }
 
 /// `runs.csv`: one row of summary metrics per run (SI units).
@@ -397,9 +569,9 @@ fn runs_csv(runs: &[(u64, Summary)]) -> String {
             format!("{:.9}", s.ekf_position_rmse),
             format!("{:.9}", s.ekf_heading_rmse),
             format!("{:.9}", s.ekf_max_position_error),
-            format!("{:.9}", s.odometry_position_rmse),
-            format!("{:.9}", s.odometry_heading_rmse),
-            format!("{:.9}", s.odometry_max_position_error),
+            csv_num(s.odometry_position_rmse),
+            csv_num(s.odometry_heading_rmse),
+            csv_num(s.odometry_max_position_error),
             format!("{:.6}", s.mean_nees),
             format!("{:.6}", s.nees_in_interval),
             s.readings.to_string(),
@@ -416,19 +588,10 @@ fn runs_csv(runs: &[(u64, Summary)]) -> String {
 
 /// Aggregate `metrics.json` of a Monte Carlo: settings, then
 /// `{mean, std, min, max}` over runs of each metric (SI; std is n - 1).
-fn monte_carlo_json(
-    scenario: &str,
-    first_seed: u64,
-    cfg: &SquareConfig,
-    runs: &[(u64, Summary)],
-) -> String {
-    let mut fields: Vec<(&str, String)> = vec![
-        ("scenario", format!("\"{scenario}\"")),
-        ("first_seed", first_seed.to_string()),
-        ("runs", runs.len().to_string()),
-        ("dt_s", num(cfg.dt)),
-        ("laps", cfg.laps.to_string()),
-    ];
+fn monte_carlo_json(info: &Info, first_seed: u64, runs: &[(u64, Summary)]) -> String {
+    let mut fields = settings(info);
+    fields.insert(1, ("first_seed", first_seed.to_string()));
+    fields.insert(2, ("runs", runs.len().to_string()));
     let extra: [(&str, Getter); 2] = [
         ("ekf_max_position_error_m", |s| s.ekf_max_position_error),
         ("nees_in_95_interval_share", |s| s.nees_in_interval),
@@ -456,4 +619,16 @@ fn monte_carlo_json(
         .map(|(k, v)| format!("  \"{k}\": {v}"))
         .collect();
     format!("{{\n{}\n}}\n", body.join(",\n"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_missing_figure_is_printed_as_n_a() {
+        assert_eq!(fig(f64::NAN, 100.0, 2), "n/a");
+        assert_eq!(fig(0.0117, 100.0, 2), "1.17");
+        assert_eq!(csv_num(f64::NAN), "");
+    }
 }

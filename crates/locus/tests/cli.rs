@@ -252,3 +252,154 @@ fn run_monte_carlo_prints_the_table_and_writes_runs_csv() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `locus run | head`: a reader that goes away early is not an error and
+/// never a panic.
+#[test]
+fn run_into_a_closed_pipe_exits_quietly() {
+    let dir = temp_dir("broken-pipe");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_locus"))
+        .args(["run", "--laps", "1", "--out"])
+        .arg(&dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("start locus");
+    // Close the read end before locus prints anything.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("wait for locus");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 5: `locus run FILE.toml` runs a scenario file; `--print-config`
+/// prints a template that runs the same; a bad file names line and field.
+#[test]
+fn run_a_scenario_file_and_print_its_template() {
+    let dir = temp_dir("scenario-file");
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let template = locus(&["run", "--print-config", "square"]);
+    assert!(template.status.success());
+    let text = String::from_utf8(template.stdout).unwrap();
+    assert!(text.contains("scenario = \"square\""), "{text}");
+    let file = dir.join("one-lap.toml");
+    std::fs::write(&file, text.replace("laps = 2", "laps = 1")).expect("write");
+    let out = locus(&[
+        "run",
+        file.to_str().expect("utf-8"),
+        "--out",
+        dir.join("out").to_str().expect("utf-8"),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("locus run one-lap:"), "{stdout}");
+    assert!(stdout.contains(", 1 laps)"), "{stdout}");
+
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        "scenario = \"square\"\nlaps = 1\nwheelbase = \"wide\"\n",
+    )
+    .expect("write");
+    let out = locus(&["run", bad.to_str().expect("utf-8")]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("bad.toml, line 3, column 13, field `wheelbase`"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 5: one run draws its pictures (PNG and SVG) unless `--no-plots`.
+#[test]
+fn run_writes_the_pictures_as_png_and_svg() {
+    let dir = temp_dir("pictures");
+    let out = locus(&["run", "--laps", "1", "--out", dir.to_str().expect("utf-8")]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for name in ["map", "errors", "covariance"] {
+        let png = std::fs::read(dir.join(format!("{name}.png"))).expect("png");
+        assert!(
+            png.starts_with(b"\x89PNG\r\n\x1a\n"),
+            "{name}.png signature"
+        );
+        assert!(png.len() > 10_000, "{name}.png: {} bytes", png.len());
+        let svg = std::fs::read_to_string(dir.join(format!("{name}.svg"))).expect("svg");
+        assert!(svg.contains("<svg"), "{name}.svg");
+        assert!(
+            svg.contains("[m]") || svg.contains("[s]"),
+            "{name}.svg axis units"
+        );
+    }
+    let svg = std::fs::read_to_string(dir.join("map.svg")).expect("svg");
+    assert!(svg.contains("3-sigma ellipse"), "ellipse label");
+    assert!(svg.contains("98.9 %"), "ellipse probability");
+
+    // The ellipse level is a setting, labelled with its 2-D probability.
+    let out = locus(&[
+        "run",
+        "--laps",
+        "1",
+        "--ellipse-sigma",
+        "1",
+        "--out",
+        dir.to_str().expect("utf-8"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = std::fs::read_to_string(dir.join("map.svg")).expect("svg");
+    assert!(svg.contains("1-sigma ellipse"), "ellipse label");
+    assert!(svg.contains("39.3 %"), "1-sigma ellipse probability");
+
+    let bare = temp_dir("no-pictures");
+    let out = locus(&[
+        "run",
+        "--laps",
+        "1",
+        "--no-plots",
+        "--out",
+        bare.to_str().expect("utf-8"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(bare.join("log.csv").exists());
+    assert!(!bare.join("map.png").exists(), "--no-plots drew a map");
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&bare);
+}
+
+/// `locus guide` prints the steps a-f with a verdict each and its exit
+/// code says whether every step passed (step e fails its RMSE criterion,
+/// see the README).
+#[test]
+fn guide_prints_every_step_and_exits_with_the_verdict() {
+    let out = locus(&["guide", "--seed", "1"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    for step in ["a)", "b)", "c)", "d)", "e)", "f)"] {
+        assert!(stdout.contains(step), "{step} missing:\n{stdout}");
+    }
+    let fails = stdout.matches("FAIL").count();
+    assert_eq!(out.status.success(), fails == 0, "{stdout}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        stderr.contains("failed their criterion"),
+        fails > 0,
+        "{stderr}"
+    );
+}

@@ -1,0 +1,307 @@
+//! Scenarios by name or from a TOML file.
+//!
+//! A built-in scenario is a name ([`BUILTIN`]: `square`, `square-ideal`). A
+//! scenario file names its kind in a top-level `scenario = "square"` (any
+//! built-in name); every other key overrides that built-in's configuration
+//! (for `square`: the fields of [`SquareConfig`], nested `[control]` for the
+//! controller). Unknown keys, wrong types and out-of-range values are
+//! [`FileError::Invalid`] errors naming the file, line, column and field.
+//!
+//! ```toml
+//! scenario = "square"
+//! laps = 1
+//! q22 = 4e-6            # rad^2 per step
+//! [control]
+//! v_ref = 0.15          # m/s
+//! ```
+//!
+//! Adding a scenario kind: a [`ScenarioConfig`] variant, its name in
+//! [`BUILTIN`] and one arm in each `match` of this file (the compiler lists
+//! them: the enum is exhaustive). In [`parse`], a kind whose built-in is its
+//! config's `Default` can use `toml::from_str::<XConfig>` on the blanked
+//! text (needs only `Deserialize`); a preset that differs from `Default` uses `overlay` (also
+//! `Serialize`, as does [`ScenarioConfig::to_toml`]).
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use toml::de::{DeTable, DeValue};
+
+use crate::closed_loop::{self, SquareConfig};
+
+/// The built-in scenarios, by name.
+pub const BUILTIN: [&str; 2] = ["square", "square-ideal"];
+
+/// A scenario's configuration, by kind. Exhaustive on purpose: a new kind
+/// must be handled wherever scenarios are dispatched.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ScenarioConfig {
+    /// Paper 001's closed loop on the square arena
+    /// ([`crate::closed_loop::run_square`]).
+    Square(SquareConfig),
+}
+
+impl ScenarioConfig {
+    /// The built-in scenario `name` (one of [`BUILTIN`]).
+    #[must_use]
+    pub fn builtin(name: &str) -> Option<Self> {
+        match name {
+            "square" => Some(Self::Square(SquareConfig::default())),
+            "square-ideal" => Some(Self::Square(SquareConfig::ideal())),
+            _ => None,
+        }
+    }
+
+    /// The kind's name in a scenario file (`square`).
+    #[must_use]
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Self::Square(_) => "square",
+        }
+    }
+
+    /// `Ok(())` if every value is in its domain.
+    ///
+    /// # Errors
+    /// [`Invalid`]: the bad field (as named in a scenario file) if the
+    /// kind's error names one, and the message.
+    pub fn validate(&self) -> Result<(), Invalid> {
+        match self {
+            Self::Square(c) => c.validate().map_err(|e| Invalid {
+                field: match e {
+                    closed_loop::Error::Invalid { field, .. } => Some(field),
+                    _ => None,
+                },
+                message: e.to_string(),
+            }),
+        }
+    }
+
+    /// The configuration as a complete scenario file of kind `kind`: loading
+    /// it gives this configuration back.
+    ///
+    /// # Errors
+    /// [`FileError::Serialize`] if TOML cannot represent a value (a
+    /// non-finite number).
+    pub fn to_toml(&self, kind: &str) -> Result<String, FileError> {
+        let body = match self {
+            Self::Square(c) => toml::to_string(c),
+        }
+        .map_err(|e| FileError::Serialize(e.to_string()))?;
+        Ok(format!(
+            "# Locus scenario file (SI units: m, s, rad). Every key is optional and\n\
+             # overrides the built-in `{kind}`; run it with `locus run FILE.toml`.\n\
+             scenario = \"{kind}\"\n{body}"
+        ))
+    }
+}
+
+/// An out-of-range configuration value, kind-independent.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Invalid {
+    /// The field as named in a scenario file (dotted for nested keys), if
+    /// known.
+    pub field: Option<&'static str>,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// Errors of a scenario file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum FileError {
+    /// The file could not be read.
+    #[error("cannot read scenario file {path}", path = .path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// Bad TOML, a missing or unknown `scenario`, an unknown key, a wrong
+    /// type or an out-of-range value.
+    #[error("{path}, line {line}, column {column}{field}: {message}",
+        path = .path.display(),
+        field = .field.as_ref().map_or_else(String::new, |f| format!(", field `{f}`")))]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// Line of the offending text (1-based; 0 if unknown).
+        line: usize,
+        /// Column of the offending text (1-based, in characters; 0 if
+        /// unknown).
+        column: usize,
+        /// The key concerned (dotted path for nested keys), if known.
+        field: Option<String>,
+        /// What is wrong.
+        message: String,
+    },
+    /// A configuration could not be written as TOML.
+    #[error("cannot write the configuration as TOML: {0}")]
+    Serialize(String),
+}
+
+/// Reads and parses the scenario file at `path`.
+///
+/// # Errors
+/// [`FileError::Io`] if it cannot be read; [`FileError::Invalid`] as in
+/// [`parse`].
+pub fn load(path: &Path) -> Result<ScenarioConfig, FileError> {
+    let text = std::fs::read_to_string(path).map_err(|source| FileError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse(&text, path)
+}
+
+/// 1-based line and column (characters) of byte `offset` in `text`.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    (line, before[line_start..].chars().count() + 1)
+}
+
+/// The dotted path of the key whose text or value holds byte `offset`
+/// (innermost key of nested tables).
+fn field_at(table: &DeTable<'_>, offset: usize) -> Option<String> {
+    for (key, value) in table {
+        let name = key.get_ref().to_string();
+        if key.span().contains(&offset) {
+            return Some(name);
+        }
+        // A `[table]`'s span may cover its header only: search its keys.
+        if let DeValue::Table(inner) = value.get_ref() {
+            if let Some(sub) = field_at(inner, offset) {
+                return Some(format!("{name}.{sub}"));
+            }
+        }
+        if value.span().contains(&offset) {
+            return Some(name);
+        }
+    }
+    None
+}
+
+/// Byte span of the key at dotted path `field` (its key text), if present.
+fn key_span(table: &DeTable<'_>, field: &str) -> Option<core::ops::Range<usize>> {
+    let (head, rest) = field.split_once('.').unwrap_or((field, ""));
+    let (key, value) = table.iter().find(|(k, _)| k.get_ref() == head)?;
+    if rest.is_empty() {
+        return Some(key.span());
+    }
+    match value.get_ref() {
+        DeValue::Table(inner) => key_span(inner, rest).or_else(|| Some(key.span())),
+        _ => Some(key.span()),
+    }
+}
+
+/// The overrides of `text` (the `scenario` key blanked) on top of `base`:
+/// first checked against `C` alone, so unknown keys and wrong types report
+/// their position, then merged key by key into `base`.
+fn overlay<C>(base: &C, text: &str) -> Result<C, toml::de::Error>
+where
+    C: Serialize + DeserializeOwned,
+{
+    let _: C = toml::from_str(text)?;
+    let user: toml::Table = toml::from_str(text)?;
+    let mut merged = toml::Table::try_from(base).map_err(|e| {
+        <toml::de::Error as serde::de::Error>::custom(format!("default configuration: {e}"))
+    })?;
+    merge(&mut merged, user);
+    toml::Value::Table(merged).try_into()
+}
+
+/// Deep merge: `over`'s keys replace `into`'s, tables merge recursively.
+fn merge(into: &mut toml::Table, over: toml::Table) {
+    for (k, v) in over {
+        match (into.get_mut(&k), v) {
+            (Some(toml::Value::Table(a)), toml::Value::Table(b)) => merge(a, b),
+            (_, v) => {
+                into.insert(k, v);
+            }
+        }
+    }
+}
+
+/// Parses scenario file `text` (`path` is for the messages).
+///
+/// # Errors
+/// [`FileError::Invalid`]: TOML syntax, no or an unknown `scenario` kind,
+/// unknown keys, wrong types, values out of range; with line, column and
+/// field.
+pub fn parse(text: &str, path: &Path) -> Result<ScenarioConfig, FileError> {
+    let invalid =
+        |span: Option<core::ops::Range<usize>>, field: Option<String>, message: String| {
+            let (line, column) = span.map_or((0, 0), |s| line_column(text, s.start));
+            FileError::Invalid {
+                path: path.to_path_buf(),
+                line,
+                column,
+                field,
+                message,
+            }
+        };
+    let doc = DeTable::parse(text)
+        .map_err(|e| invalid(e.span(), None, e.message().trim().to_string()))?;
+    let table = doc.get_ref();
+    let Some((key, value)) = table.iter().find(|(k, _)| k.get_ref() == "scenario") else {
+        return Err(invalid(
+            Some(0..0),
+            Some("scenario".into()),
+            format!(
+                "missing top-level `scenario = \"KIND\"`; kinds: {}",
+                BUILTIN.join(", ")
+            ),
+        ));
+    };
+    let kind = match value.get_ref() {
+        DeValue::String(s) => s.to_string(),
+        _ => {
+            return Err(invalid(
+                Some(value.span()),
+                Some("scenario".into()),
+                "must be a string".into(),
+            ));
+        }
+    };
+    let Some(base) = ScenarioConfig::builtin(&kind) else {
+        return Err(invalid(
+            Some(value.span()),
+            Some("scenario".into()),
+            format!("unknown kind `{kind}`; kinds: {}", BUILTIN.join(", ")),
+        ));
+    };
+    // Blank `scenario = "..."` (same length: positions stay right).
+    let mut blanked = text.to_string();
+    let span = key.span().start..value.span().end;
+    let spaces = " ".repeat(span.len());
+    blanked.replace_range(span, &spaces);
+
+    let de_error = |e: toml::de::Error| {
+        let field = e.span().and_then(|s| field_at(table, s.start));
+        invalid(e.span(), field, e.message().trim().to_string())
+    };
+    let config = match base {
+        ScenarioConfig::Square(b) => {
+            ScenarioConfig::Square(overlay(&b, &blanked).map_err(de_error)?)
+        }
+    };
+    if let Err(Invalid { field, message }) = config.validate() {
+        let span = field.and_then(|f| key_span(table, f));
+        return Err(invalid(span, field.map(str::to_string), message));
+    }
+    Ok(config)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_and_column_are_one_based() {
+        assert_eq!(line_column("ab\ncd", 0), (1, 1));
+        assert_eq!(line_column("ab\ncd", 4), (2, 2));
+    }
+}

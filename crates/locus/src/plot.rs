@@ -1,0 +1,504 @@
+//! Pictures of a run, from its per-step [`Sample`]s and the map's walls, so
+//! they work for every scenario: `map` (walls, true / estimated / odometry
+//! paths, covariance ellipses of the x-y block), `errors` (x, y, heading
+//! errors with +-3 sigma bands) and `covariance` (the variances over time,
+//! log scale), each as PNG and SVG.
+//!
+//! Text uses DejaVu Sans, embedded in the binary (`assets/fonts`, with its
+//! license) and registered with plotters, so no system font is needed.
+
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+use anyhow::{Context, Result, anyhow};
+use locus_models::laser_wall::Segment;
+use locus_sim::scenario::Sample;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+
+/// DejaVu Sans (Debian `fonts-dejavu-core`; license beside the file).
+const FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
+
+/// The font family every text uses.
+const FAMILY: &str = "sans-serif";
+
+/// Picture size (pixels) of the time plots; the map is square.
+const SIZE: (u32, u32) = (1000, 700);
+
+/// Side of the square map picture (pixels).
+const MAP_SIDE: u32 = 800;
+
+/// At most this many points per plotted series (the samples are thinned
+/// evenly; the SVGs stay small).
+const MAX_POINTS: usize = 2000;
+
+/// Default level of the covariance ellipses on the map (standard
+/// deviations).
+pub const ELLIPSE_SIGMA: f64 = 3.0;
+
+/// Simulated time between two covariance ellipses on the map (s).
+const ELLIPSE_EVERY: f64 = 10.0;
+
+/// Probability that a 2-D Gaussian falls inside its `k`-sigma ellipse:
+/// `1 - exp(-k^2 / 2)` (the squared Mahalanobis distance is chi-square with
+/// 2 dof). For `k = 3`: 98.9 %, not the 1-D 99.7 %.
+#[must_use]
+pub fn ellipse_probability(k: f64) -> f64 {
+    1.0 - (-k * k / 2.0).exp()
+}
+
+/// Registers the embedded font once.
+fn register_font() -> Result<()> {
+    static ONCE: Once = Once::new();
+    let mut result = Ok(());
+    ONCE.call_once(|| {
+        result = plotters::style::register_font(FAMILY, FontStyle::Normal, FONT)
+            .map_err(|_| anyhow!("the embedded DejaVu Sans font is invalid"));
+    });
+    result
+}
+
+/// Every `ceil(n / MAX_POINTS)`-th sample (and the last).
+fn thinned(samples: &[Sample]) -> impl Iterator<Item = &Sample> {
+    let step = samples.len().div_ceil(MAX_POINTS).max(1);
+    samples
+        .iter()
+        .enumerate()
+        .filter(move |(i, _)| i % step == 0 || i + 1 == samples.len())
+        .map(|(_, s)| s)
+}
+
+/// The `k`-sigma ellipse of the 2x2 covariance `[[a, b], [b, c]]` around
+/// `centre`, as a closed polygon (m).
+fn ellipse(centre: [f64; 2], a: f64, b: f64, c: f64, k: f64) -> Vec<(f64, f64)> {
+    let half = (a - c) / 2.0;
+    let root = (half * half + b * b).sqrt();
+    let l1 = ((a + c) / 2.0 + root).max(0.0);
+    let l2 = ((a + c) / 2.0 - root).max(0.0);
+    let angle = 0.5 * (2.0 * b).atan2(a - c);
+    let (sa, ca) = angle.sin_cos();
+    (0..=72)
+        .map(|i| {
+            let t = f64::from(i) * core::f64::consts::TAU / 72.0;
+            let (u, v) = (k * l1.sqrt() * t.cos(), k * l2.sqrt() * t.sin());
+            (centre[0] + ca * u - sa * v, centre[1] + sa * u + ca * v)
+        })
+        .collect()
+}
+
+/// A plotters error as an anyhow error.
+fn err<E: core::fmt::Debug>(e: E) -> anyhow::Error {
+    anyhow!("drawing: {e:?}")
+}
+
+/// The map: walls, paths and covariance ellipses.
+fn draw_map<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    samples: &[Sample],
+    walls: &[Segment<f64>],
+    title: &str,
+    sigma: f64,
+) -> Result<()> {
+    root.fill(&WHITE).map_err(err)?;
+    let mut xs: Vec<f64> = Vec::new();
+    let mut ys: Vec<f64> = Vec::new();
+    for w in walls {
+        xs.extend([w.a[0], w.b[0]]);
+        ys.extend([w.a[1], w.b[1]]);
+    }
+    for s in samples {
+        xs.extend([s.truth[0], s.estimate[0]]);
+        ys.extend([s.truth[1], s.estimate[1]]);
+        if let Some((p, _)) = s.odometry {
+            xs.push(p[0]);
+            ys.push(p[1]);
+        }
+    }
+    let fold = |v: &[f64]| {
+        v.iter()
+            .filter(|x| x.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                (lo.min(x), hi.max(x))
+            })
+    };
+    let ((x0, x1), (y0, y1)) = (fold(&xs), fold(&ys));
+    if !(x0.is_finite() && y0.is_finite()) {
+        return Err(anyhow!("nothing to draw on the map"));
+    }
+    // Equal scales on both axes, 10 % margin.
+    let side = (x1 - x0).max(y1 - y0).max(0.1) * 1.1;
+    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (FAMILY, 20))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(60)
+        .build_cartesian_2d(
+            (cx - side / 2.0)..(cx + side / 2.0),
+            (cy - side / 2.0)..(cy + side / 2.0),
+        )
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("x [m]")
+        .y_desc("y [m]")
+        .label_style((FAMILY, 14))
+        .draw()
+        .map_err(err)?;
+
+    let wall_style = ShapeStyle::from(&BLACK).stroke_width(4);
+    for (i, w) in walls.iter().enumerate() {
+        let series = LineSeries::new([(w.a[0], w.a[1]), (w.b[0], w.b[1])], wall_style);
+        let drawn = chart.draw_series(series).map_err(err)?;
+        if i == 0 {
+            drawn
+                .label("walls")
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], wall_style));
+        }
+    }
+    let truth = RGBColor(0, 150, 0);
+    let est = RGBColor(0, 80, 220);
+    let odo = RGBColor(220, 60, 0);
+    let ellipse_color = RGBColor(160, 0, 160);
+    chart
+        .draw_series(LineSeries::new(
+            thinned(samples).map(|s| (s.truth[0], s.truth[1])),
+            truth.stroke_width(2),
+        ))
+        .map_err(err)?
+        .label("true path")
+        .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], truth.stroke_width(2)));
+    chart
+        .draw_series(LineSeries::new(
+            thinned(samples).map(|s| (s.estimate[0], s.estimate[1])),
+            est.stroke_width(1),
+        ))
+        .map_err(err)?
+        .label("EKF estimate")
+        .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], est.stroke_width(2)));
+    if samples.iter().any(|s| s.odometry.is_some()) {
+        chart
+            .draw_series(LineSeries::new(
+                thinned(samples).filter_map(|s| s.odometry.map(|(p, _)| (p[0], p[1]))),
+                odo.stroke_width(1),
+            ))
+            .map_err(err)?
+            .label("odometry alone")
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], odo.stroke_width(2)));
+    }
+    let mut next = 0.0;
+    let mut ellipses = Vec::new();
+    for s in samples {
+        if s.time + 1e-9 >= next {
+            let p = &s.covariance;
+            ellipses.push(ellipse(
+                [s.estimate[0], s.estimate[1]],
+                p[0][0],
+                p[0][1],
+                p[1][1],
+                sigma,
+            ));
+            next = s.time + ELLIPSE_EVERY;
+        }
+    }
+    let label = format!(
+        "{sigma}-sigma ellipse of x-y (every {ELLIPSE_EVERY:.0} s, true scale), {:.1} %",
+        100.0 * ellipse_probability(sigma)
+    );
+    chart
+        .draw_series(
+            ellipses
+                .into_iter()
+                .map(|e| PathElement::new(e, ellipse_color.stroke_width(2))),
+        )
+        .map_err(err)?
+        .label(label)
+        .legend(move |(x, y)| {
+            PathElement::new([(x, y), (x + 20, y)], ellipse_color.stroke_width(2))
+        });
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font((FAMILY, 14))
+        .position(SeriesLabelPosition::MiddleMiddle)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
+/// One panel of the error plot: `error(s)` and `+-3 sigma(s)` over time,
+/// in display units (`scale`).
+fn error_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    samples: &[Sample],
+    name: &str,
+    unit: &str,
+    scale: f64,
+    error: impl Fn(&Sample) -> f64,
+    variance: impl Fn(&Sample) -> f64,
+) -> Result<()> {
+    let t1 = samples.last().map_or(1.0, |s| s.time).max(1e-3);
+    let band = |s: &Sample| scale * 3.0 * variance(s).max(0.0).sqrt();
+    let hi = thinned(samples)
+        .map(|s| (scale * error(s)).abs().max(band(s)))
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, f64::max)
+        .max(1e-9)
+        * 1.1;
+    let mut chart = ChartBuilder::on(area)
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0.0..t1, -hi..hi)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("time [s]")
+        .y_desc(format!("{name} error [{unit}]"))
+        .label_style((FAMILY, 13))
+        .draw()
+        .map_err(err)?;
+    let band_color = RGBColor(150, 150, 150);
+    // The band as one polygon: +3 sigma forwards, -3 sigma backwards.
+    let upper: Vec<(f64, f64)> = thinned(samples).map(|s| (s.time, band(s))).collect();
+    let polygon: Vec<(f64, f64)> = upper
+        .iter()
+        .copied()
+        .chain(upper.iter().rev().map(|&(t, b)| (t, -b)))
+        .collect();
+    chart
+        .draw_series(core::iter::once(Polygon::new(
+            polygon,
+            band_color.mix(0.35).filled(),
+        )))
+        .map_err(err)?
+        .label("+-3 sigma (EKF covariance)")
+        .legend(move |(x, y)| {
+            Rectangle::new([(x, y - 5), (x + 20, y + 5)], band_color.mix(0.5).filled())
+        });
+    let line = RGBColor(0, 80, 220);
+    chart
+        .draw_series(LineSeries::new(
+            thinned(samples).map(|s| (s.time, scale * error(s))),
+            line.stroke_width(1),
+        ))
+        .map_err(err)?
+        .label(format!("{name} error (truth - EKF)"))
+        .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], line.stroke_width(2)));
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font((FAMILY, 13))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}
+
+/// x, y and heading errors with their +-3 sigma bands.
+fn draw_errors<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    samples: &[Sample],
+    title: &str,
+) -> Result<()> {
+    root.fill(&WHITE).map_err(err)?;
+    let root = root.titled(title, (FAMILY, 20)).map_err(err)?;
+    let panels = root.split_evenly((3, 1));
+    error_panel(
+        &panels[0],
+        samples,
+        "x",
+        "cm",
+        100.0,
+        |s| s.truth[0] - s.estimate[0],
+        |s| s.covariance[0][0],
+    )?;
+    error_panel(
+        &panels[1],
+        samples,
+        "y",
+        "cm",
+        100.0,
+        |s| s.truth[1] - s.estimate[1],
+        |s| s.covariance[1][1],
+    )?;
+    error_panel(
+        &panels[2],
+        samples,
+        "heading",
+        "deg",
+        180.0 / core::f64::consts::PI,
+        |s| s.heading_error,
+        |s| s.covariance[2][2],
+    )?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
+/// The variances `P_x`, `P_y` (m^2) and `P_theta` (rad^2) over time, log
+/// scale.
+fn draw_covariance<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    samples: &[Sample],
+    title: &str,
+) -> Result<()> {
+    root.fill(&WHITE).map_err(err)?;
+    let t1 = samples.last().map_or(1.0, |s| s.time).max(1e-3);
+    let (lo, hi) = samples
+        .iter()
+        .flat_map(|s| (0..3).map(|i| s.covariance[i][i]))
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    if !lo.is_finite() {
+        return Err(anyhow!("no positive variance to draw"));
+    }
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (FAMILY, 20))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(80)
+        .build_cartesian_2d(0.0..t1, (lo / 2.0..hi * 2.0).log_scale())
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("time [s]")
+        .y_desc("variance [m^2 (x, y); rad^2 (theta)]")
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .label_style((FAMILY, 14))
+        .draw()
+        .map_err(err)?;
+    let series = [
+        ("P_x [m^2]", 0, RGBColor(0, 80, 220)),
+        ("P_y [m^2]", 1, RGBColor(0, 150, 0)),
+        ("P_theta [rad^2]", 2, RGBColor(220, 60, 0)),
+    ];
+    for (name, i, color) in series {
+        chart
+            .draw_series(LineSeries::new(
+                thinned(samples)
+                    .filter(|s| s.covariance[i][i] > 0.0)
+                    .map(|s| (s.time, s.covariance[i][i])),
+                color.stroke_width(2),
+            ))
+            .map_err(err)?
+            .label(name)
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font((FAMILY, 14))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
+/// Writes `map` (ellipses at `ellipse_sigma` standard deviations),
+/// `errors` and `covariance` as `.png` and `.svg` into `dir`; returns the
+/// paths written.
+///
+/// # Errors
+/// No samples, or a picture that cannot be drawn or written.
+pub fn write_all(
+    dir: &Path,
+    samples: &[Sample],
+    walls: &[Segment<f64>],
+    title: &str,
+    ellipse_sigma: f64,
+) -> Result<Vec<PathBuf>> {
+    if samples.is_empty() {
+        return Err(anyhow!("no steps to plot"));
+    }
+    if !(ellipse_sigma.is_finite() && ellipse_sigma > 0.0) {
+        return Err(anyhow!("the ellipse level must be finite and > 0 sigma"));
+    }
+    register_font()?;
+    let mut written = Vec::new();
+    for ext in ["png", "svg"] {
+        let map = dir.join(format!("map.{ext}"));
+        let errors = dir.join(format!("errors.{ext}"));
+        let cov = dir.join(format!("covariance.{ext}"));
+        let map_title = format!("{title}: paths and covariance");
+        let err_title = format!("{title}: EKF errors and +-3 sigma");
+        let cov_title = format!("{title}: EKF variances");
+        let side = (MAP_SIDE, MAP_SIDE);
+        if ext == "png" {
+            draw_map(
+                &BitMapBackend::new(&map, side).into_drawing_area(),
+                samples,
+                walls,
+                &map_title,
+                ellipse_sigma,
+            )
+        } else {
+            draw_map(
+                &SVGBackend::new(&map, side).into_drawing_area(),
+                samples,
+                walls,
+                &map_title,
+                ellipse_sigma,
+            )
+        }
+        .with_context(|| format!("writing {}", map.display()))?;
+        if ext == "png" {
+            draw_errors(
+                &BitMapBackend::new(&errors, SIZE).into_drawing_area(),
+                samples,
+                &err_title,
+            )
+        } else {
+            draw_errors(
+                &SVGBackend::new(&errors, SIZE).into_drawing_area(),
+                samples,
+                &err_title,
+            )
+        }
+        .with_context(|| format!("writing {}", errors.display()))?;
+        if ext == "png" {
+            draw_covariance(
+                &BitMapBackend::new(&cov, SIZE).into_drawing_area(),
+                samples,
+                &cov_title,
+            )
+        } else {
+            draw_covariance(
+                &SVGBackend::new(&cov, SIZE).into_drawing_area(),
+                samples,
+                &cov_title,
+            )
+        }
+        .with_context(|| format!("writing {}", cov.display()))?;
+        written.extend([map, errors, cov]);
+    }
+    Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ellipse_probabilities_are_those_of_a_2d_gaussian() {
+        assert!((ellipse_probability(1.0) - 0.393_469).abs() < 1e-6);
+        assert!((ellipse_probability(3.0) - 0.988_891).abs() < 1e-6);
+    }
+
+    #[test]
+    fn an_ellipse_has_the_covariances_axes() {
+        // P = diag(4, 1), rotated by 90 deg: x variance 1, y variance 4.
+        let e = ellipse([1.0, 2.0], 1.0, 0.0, 4.0, 3.0);
+        let max_x = e.iter().map(|p| (p.0 - 1.0).abs()).fold(0.0, f64::max);
+        let max_y = e.iter().map(|p| (p.1 - 2.0).abs()).fold(0.0, f64::max);
+        assert!((max_x - 3.0).abs() < 1e-9, "{max_x}");
+        assert!((max_y - 6.0).abs() < 1e-9, "{max_y}");
+    }
+}
