@@ -47,13 +47,13 @@ use locus_models::{CameraMarks4, ContinuousObserver, RandomWalk6};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rand_distr::{Distribution, StandardNormal};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::closed_loop::Error;
 use crate::scenario::{Record, Sample, Summary, Tally};
 
 /// The estimator of the `hover` scenario.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum HoverEstimator {
     /// The discrete EKF (prediction [`RandomWalk6`], correction
@@ -74,7 +74,7 @@ pub enum HoverEstimator {
 }
 
 /// Configuration of `hover` (SI units; pixels for the camera).
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct HoverConfig {
     /// Step (s): camera frame period and filter step. 0.005 s, the paper's
@@ -122,27 +122,35 @@ impl HoverConfig {
     /// `Ok(())` if every value is in its domain.
     ///
     /// # Errors
-    /// [`Error::Config`] naming the first bad field.
+    /// [`Error::Invalid`] naming the first bad field.
     pub fn validate(&self) -> Result<(), Error> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
-        let checks: [(bool, &'static str); 7] = [
-            (pos(self.dt), "dt must be finite and > 0"),
+        let checks: [(bool, &'static str, &'static str); 7] = [
+            (pos(self.dt), "dt", "must be finite and > 0"),
             (
                 pos(self.duration) && self.duration >= self.dt,
-                "duration must be finite and >= dt",
+                "duration",
+                "must be finite and >= dt",
             ),
             (
                 self.q.iter().all(|v| v.is_finite() && *v >= 0.0),
-                "q must be finite and >= 0",
+                "q",
+                "must be finite and >= 0",
             ),
-            (pos(self.pixel_sigma), "pixel_sigma must be finite and > 0"),
+            (
+                pos(self.pixel_sigma),
+                "pixel_sigma",
+                "must be finite and > 0",
+            ),
             (
                 self.marks.iter().flatten().all(|v| v.is_finite()),
-                "marks must be finite",
+                "marks",
+                "must be finite",
             ),
             (
                 self.initial_std.iter().all(|v| pos(*v)),
-                "initial_std must be finite and > 0",
+                "initial_std",
+                "must be finite and > 0",
             ),
             (
                 match self.estimator {
@@ -151,11 +159,12 @@ impl HoverConfig {
                         alpha.is_finite() && alpha >= 0.0 && vg.is_finite() && vg > 0.0
                     }
                 },
-                "estimator alpha must be finite and >= 0, vg finite and > 0",
+                "estimator",
+                "alpha must be finite and >= 0, vg finite and > 0",
             ),
         ];
-        match checks.iter().find(|(ok, _)| !ok) {
-            Some((_, msg)) => Err(Error::Config(msg)),
+        match checks.iter().find(|(ok, _, _)| !ok) {
+            Some(&(_, field, reason)) => Err(Error::Invalid { field, reason }),
             None => Ok(()),
         }
     }

@@ -1,7 +1,7 @@
 //! Scenarios by name or from a TOML file.
 //!
-//! A built-in scenario is a name ([`BUILTIN`]: `square`, `square-ideal`). A
-//! scenario file names its kind in a top-level `scenario = "square"` (any
+//! A built-in scenario is a name ([`BUILTIN`]: `square`, `square-ideal`, `wall45`,
+//! `tricycle-slip`, `hover`). A scenario file names its kind in a top-level `scenario = "square"` (any
 //! built-in name); every other key overrides that built-in's configuration
 //! (for `square`: the fields of [`SquareConfig`], nested `[control]` for the
 //! controller). Unknown keys, wrong types and out-of-range values are
@@ -29,9 +29,12 @@ use serde::de::DeserializeOwned;
 use toml::de::{DeTable, DeValue};
 
 use crate::closed_loop::{self, SquareConfig};
+use crate::hover::HoverConfig;
+use crate::tricycle_slip::TricycleSlipConfig;
+use crate::wall45::Wall45Config;
 
 /// The built-in scenarios, by name.
-pub const BUILTIN: [&str; 2] = ["square", "square-ideal"];
+pub const BUILTIN: [&str; 5] = ["square", "square-ideal", "wall45", "tricycle-slip", "hover"];
 
 /// A scenario's configuration, by kind. Exhaustive on purpose: a new kind
 /// must be handled wherever scenarios are dispatched.
@@ -40,6 +43,16 @@ pub enum ScenarioConfig {
     /// Paper 001's closed loop on the square arena
     /// ([`crate::closed_loop::run_square`]).
     Square(SquareConfig),
+    /// Paper 000's skid-steer robot with a laser at the 45-degree wall on
+    /// Table III's path ([`crate::wall45::run_wall45`]).
+    Wall45(Wall45Config),
+    /// Paper 004's tricycle with wheel slip: rear-only against
+    /// slip-rejecting odometry, and the EKF
+    /// ([`crate::tricycle_slip::run_tricycle_slip`]).
+    TricycleSlip(TricycleSlipConfig),
+    /// Paper 002's body hovering in front of the camera with its marks
+    /// ([`crate::hover::run_hover`]).
+    Hover(HoverConfig),
 }
 
 impl ScenarioConfig {
@@ -49,6 +62,9 @@ impl ScenarioConfig {
         match name {
             "square" => Some(Self::Square(SquareConfig::default())),
             "square-ideal" => Some(Self::Square(SquareConfig::ideal())),
+            "wall45" => Some(Self::Wall45(Wall45Config::default())),
+            "tricycle-slip" => Some(Self::TricycleSlip(TricycleSlipConfig::default())),
+            "hover" => Some(Self::Hover(HoverConfig::default())),
             _ => None,
         }
     }
@@ -58,6 +74,9 @@ impl ScenarioConfig {
     pub fn kind(&self) -> &'static str {
         match self {
             Self::Square(_) => "square",
+            Self::Wall45(_) => "wall45",
+            Self::TricycleSlip(_) => "tricycle-slip",
+            Self::Hover(_) => "hover",
         }
     }
 
@@ -67,14 +86,18 @@ impl ScenarioConfig {
     /// [`Invalid`]: the bad field (as named in a scenario file) if the
     /// kind's error names one, and the message.
     pub fn validate(&self) -> Result<(), Invalid> {
+        let invalid = |e: closed_loop::Error| Invalid {
+            field: match e {
+                closed_loop::Error::Invalid { field, .. } => Some(field),
+                _ => None,
+            },
+            message: e.to_string(),
+        };
         match self {
-            Self::Square(c) => c.validate().map_err(|e| Invalid {
-                field: match e {
-                    closed_loop::Error::Invalid { field, .. } => Some(field),
-                    _ => None,
-                },
-                message: e.to_string(),
-            }),
+            Self::Square(c) => c.validate().map_err(invalid),
+            Self::Wall45(c) => c.validate().map_err(invalid),
+            Self::TricycleSlip(c) => c.validate().map_err(invalid),
+            Self::Hover(c) => c.validate().map_err(invalid),
         }
     }
 
@@ -87,6 +110,9 @@ impl ScenarioConfig {
     pub fn to_toml(&self, kind: &str) -> Result<String, FileError> {
         let body = match self {
             Self::Square(c) => toml::to_string(c),
+            Self::Wall45(c) => toml::to_string(c),
+            Self::TricycleSlip(c) => toml::to_string(c),
+            Self::Hover(c) => toml::to_string(c),
         }
         .map_err(|e| FileError::Serialize(e.to_string()))?;
         Ok(format!(
@@ -287,6 +313,13 @@ pub fn parse(text: &str, path: &Path) -> Result<ScenarioConfig, FileError> {
         ScenarioConfig::Square(b) => {
             ScenarioConfig::Square(overlay(&b, &blanked).map_err(de_error)?)
         }
+        ScenarioConfig::Wall45(b) => {
+            ScenarioConfig::Wall45(overlay(&b, &blanked).map_err(de_error)?)
+        }
+        ScenarioConfig::TricycleSlip(b) => {
+            ScenarioConfig::TricycleSlip(overlay(&b, &blanked).map_err(de_error)?)
+        }
+        ScenarioConfig::Hover(b) => ScenarioConfig::Hover(overlay(&b, &blanked).map_err(de_error)?),
     };
     if let Err(Invalid { field, message }) = config.validate() {
         let span = field.and_then(|f| key_span(table, f));

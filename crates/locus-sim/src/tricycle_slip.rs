@@ -42,7 +42,7 @@ use locus_odometry::{Libm, Tricycle, wrapping_diff};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rand_distr::{Distribution, StandardNormal};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::closed_loop::Error;
 use crate::robot::{Command, Kinematics, Pose, Robot, Slip, SlipSchedule, Wheel};
@@ -54,7 +54,7 @@ use crate::world::World;
 const COUNTER_BITS: u32 = locus_odometry::counter::PAPER_BITS;
 
 /// The slip-rejection rule of the redundant odometry (spec section 5).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum SlipRejection {
     /// The paper's rule: component by component, the increment smaller in
@@ -79,7 +79,7 @@ impl SlipRejection {
 
 /// Configuration of `tricycle-slip` (SI units). Defaults: the spec's
 /// \[assumed\] robot and the odometry issue's slip scenario (module doc).
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct TricycleSlipConfig {
     /// Odometry and filter step (s). 0.01 s (100 Hz).
@@ -195,67 +195,84 @@ impl TricycleSlipConfig {
     /// `Ok(())` if every value is in its domain.
     ///
     /// # Errors
-    /// [`Error::Config`] naming the first bad field.
+    /// [`Error::Invalid`] naming the first bad field.
     pub fn validate(&self) -> Result<(), Error> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
         let non_neg = |v: f64| v.is_finite() && v >= 0.0;
-        let checks: [(bool, &'static str); 18] = [
-            (pos(self.dt), "dt must be finite and > 0"),
-            (pos(self.speed), "speed must be finite and > 0"),
-            (non_neg(self.straight), "straight must be finite and >= 0"),
-            (pos(self.arc_radius), "arc_radius must be finite and > 0"),
-            (non_neg(self.arc_angle), "arc_angle must be finite and >= 0"),
+        let checks: [(bool, &'static str, &'static str); 18] = [
+            (pos(self.dt), "dt", "must be finite and > 0"),
+            (pos(self.speed), "speed", "must be finite and > 0"),
+            (
+                non_neg(self.straight),
+                "straight",
+                "must be finite and >= 0",
+            ),
+            (pos(self.arc_radius), "arc_radius", "must be finite and > 0"),
+            (
+                non_neg(self.arc_angle),
+                "arc_angle",
+                "must be finite and >= 0",
+            ),
             (
                 pos(self.rear_radius) && pos(self.front_radius),
-                "rear_radius and front_radius must be finite and > 0",
+                "rear_radius",
+                "and front_radius must be finite and > 0",
             ),
-            (pos(self.track), "track must be finite and > 0"),
-            (pos(self.wheelbase), "wheelbase must be finite and > 0"),
-            (self.encoder_lines > 0, "encoder_lines must be >= 1"),
+            (pos(self.track), "track", "must be finite and > 0"),
+            (pos(self.wheelbase), "wheelbase", "must be finite and > 0"),
+            (self.encoder_lines > 0, "encoder_lines", "must be >= 1"),
             (
                 non_neg(self.bump_start)
                     && non_neg(self.bump_length)
                     && non_neg(self.bump_spacing)
                     && pos(self.bump_scale),
-                "bump_start, bump_length, bump_spacing must be >= 0 and bump_scale > 0",
+                "bump_start",
+                "must be >= 0, and bump_length, bump_spacing >= 0 and bump_scale > 0",
             ),
             (
                 non_neg(self.patch_start) && non_neg(self.patch_length) && pos(self.patch_scale),
-                "patch_start, patch_length must be >= 0 and patch_scale > 0",
+                "patch_start",
+                "must be >= 0, and patch_length >= 0 and patch_scale > 0",
             ),
             (
                 non_neg(self.travel_noise),
-                "travel_noise must be finite and >= 0",
+                "travel_noise",
+                "must be finite and >= 0",
             ),
             (
                 non_neg(self.count_var_floor) && non_neg(self.count_var_per_count),
-                "count_var_floor and count_var_per_count must be finite and >= 0",
+                "count_var_floor",
+                "and count_var_per_count must be finite and >= 0",
             ),
             (
                 self.beams.iter().flatten().all(|v| v.is_finite()),
-                "beams must be finite",
+                "beams",
+                "must be finite",
             ),
             (
                 pos(self.laser_sigma) && pos(self.laser_max_range),
-                "laser_sigma and laser_max_range must be finite and > 0",
+                "laser_sigma",
+                "and laser_max_range must be finite and > 0",
             ),
-            (self.laser_period >= 1, "laser_period must be >= 1"),
+            (self.laser_period >= 1, "laser_period", "must be >= 1"),
             (
                 self.room.iter().all(|v| v.is_finite())
                     && self.room[0] < self.room[2]
                     && self.room[1] < self.room[3],
-                "room must be finite with x_min < x_max and y_min < y_max",
+                "room",
+                "must be finite with x_min < x_max and y_min < y_max",
             ),
             (
                 self.initial_std.iter().all(|v| pos(*v))
                     && self
                         .gate_confidence
                         .is_none_or(|c| c.is_finite() && c > 0.0 && c < 1.0),
-                "initial_std must be > 0 and gate_confidence in (0, 1)",
+                "initial_std",
+                "must be > 0 and gate_confidence in (0, 1)",
             ),
         ];
-        match checks.iter().find(|(ok, _)| !ok) {
-            Some((_, msg)) => Err(Error::Config(msg)),
+        match checks.iter().find(|(ok, _, _)| !ok) {
+            Some(&(_, field, reason)) => Err(Error::Invalid { field, reason }),
             None => Ok(()),
         }
     }
@@ -392,7 +409,7 @@ fn gauss(rng: &mut StdRng, std: f64) -> f64 {
 }
 
 /// The four walls of the room `[x_min, y_min, x_max, y_max]` (m).
-fn room(r: [f64; 4]) -> World {
+pub fn room(r: [f64; 4]) -> World {
     let [x0, y0, x1, y1] = r;
     World::new(vec![
         Segment::new([x0, y0], [x1, y0]),

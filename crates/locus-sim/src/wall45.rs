@@ -63,7 +63,7 @@ use locus_models::skid_steer::{SkidSteer, TreadSpeeds};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rand_distr::{Distribution, StandardNormal};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::closed_loop::Error;
 use crate::robot::{Command, Kinematics, Pose, Robot};
@@ -87,7 +87,7 @@ pub const PAPER_TABLE3: [[f64; 6]; 6] = [
 pub const INSTANTS: usize = 6;
 
 /// Which laser measurement model the EKF corrects with.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum LaserModel {
     /// The paper's model (eq. 12-15, [`LaserWallPaper`]): `Z = [u, v]`, `H`
@@ -99,7 +99,7 @@ pub enum LaserModel {
 }
 
 /// How the simulated noise is generated (see the module documentation).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Wall45Noise {
     /// Exact-arc truth with a track error, noisy tread speeds, laser range
@@ -113,7 +113,7 @@ pub enum Wall45Noise {
 /// Configuration of the `wall45` scenario (SI units: m, s, rad). The
 /// defaults ([`Wall45Config::default`]) are the spec's values, \[assumed\]
 /// where the paper gives none.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Wall45Config {
     /// Sample time `dT` (s). \[assumed\] 0.1 s.
@@ -204,62 +204,72 @@ impl Wall45Config {
     /// `Ok(())` if every value is in its domain.
     ///
     /// # Errors
-    /// [`Error::Config`] naming the first bad field.
+    /// [`Error::Invalid`] naming the first bad field.
     pub fn validate(&self) -> Result<(), Error> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
         let non_neg = |v: f64| v.is_finite() && v >= 0.0;
-        let checks: [(bool, &'static str); 16] = [
-            (pos(self.dt), "dt must be finite and > 0"),
-            (pos(self.speed), "speed must be finite and > 0"),
-            (pos(self.turn_rate), "turn_rate must be finite and > 0"),
+        let checks: [(bool, &'static str, &'static str); 16] = [
+            (pos(self.dt), "dt", "must be finite and > 0"),
+            (pos(self.speed), "speed", "must be finite and > 0"),
+            (pos(self.turn_rate), "turn_rate", "must be finite and > 0"),
             (
                 non_neg(self.dwell) && self.dwell >= 0.5 * self.dt,
-                "dwell must be finite and >= dt / 2 (one step at rest per instant)",
+                "dwell",
+                "must be finite and >= dt / 2 (one step at rest per instant)",
             ),
-            (self.wall_a.is_finite(), "wall_a must be finite"),
-            (pos(self.track), "track must be finite and > 0"),
+            (self.wall_a.is_finite(), "wall_a", "must be finite"),
+            (pos(self.track), "track", "must be finite and > 0"),
             (
                 self.track_error.is_finite() && self.track_error > -1.0,
-                "track_error must be finite and > -1",
+                "track_error",
+                "must be finite and > -1",
             ),
             (
                 non_neg(self.true_speed_sigma),
-                "true_speed_sigma must be finite and >= 0",
+                "true_speed_sigma",
+                "must be finite and >= 0",
             ),
             (
                 pos(self.filter_speed_sigma),
-                "filter_speed_sigma must be finite and > 0",
+                "filter_speed_sigma",
+                "must be finite and > 0",
             ),
             (
                 pos(self.rest_speed_sigma),
-                "rest_speed_sigma must be finite and > 0",
+                "rest_speed_sigma",
+                "must be finite and > 0",
             ),
             (
                 self.mount.iter().all(|v| v.is_finite()),
-                "mount must be finite",
+                "mount",
+                "must be finite",
             ),
             (
                 pos(self.laser_sigma_rest),
-                "laser_sigma_rest must be finite and > 0",
+                "laser_sigma_rest",
+                "must be finite and > 0",
             ),
             (
                 pos(self.laser_sigma_moving),
-                "laser_sigma_moving must be finite and > 0",
+                "laser_sigma_moving",
+                "must be finite and > 0",
             ),
-            (pos(self.max_range), "max_range must be finite and > 0"),
+            (pos(self.max_range), "max_range", "must be finite and > 0"),
             (
                 self.start_estimate.iter().all(|v| v.is_finite())
                     && self.initial_std.iter().all(|v| pos(*v)),
-                "start_estimate must be finite and initial_std finite and > 0",
+                "start_estimate",
+                "must be finite and initial_std finite and > 0",
             ),
             (
                 self.gate_confidence
                     .is_none_or(|c| c.is_finite() && c > 0.0 && c < 1.0),
-                "gate_confidence must be in (0, 1)",
+                "gate_confidence",
+                "must be in (0, 1)",
             ),
         ];
-        match checks.iter().find(|(ok, _)| !ok) {
-            Some((_, msg)) => Err(Error::Config(msg)),
+        match checks.iter().find(|(ok, _, _)| !ok) {
+            Some(&(_, field, reason)) => Err(Error::Invalid { field, reason }),
             None => Ok(()),
         }
     }

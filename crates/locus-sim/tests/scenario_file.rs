@@ -41,7 +41,9 @@ fn printed_configurations_load_back() {
 #[test]
 fn keys_override_the_kinds_defaults_and_the_rest_stays() {
     let text = "scenario = \"square-ideal\"\nlaps = 1\nq22 = 4e-6\n[control]\nv_ref = 0.15\n";
-    let ScenarioConfig::Square(cfg) = parse(text, Path::new("a.toml")).expect("parse");
+    let ScenarioConfig::Square(cfg) = parse(text, Path::new("a.toml")).expect("parse") else {
+        panic!("not a square scenario");
+    };
     let ideal = SquareConfig::ideal();
     assert_eq!(cfg.laps, 1);
     assert_eq!(cfg.q22, 4e-6);
@@ -51,7 +53,9 @@ fn keys_override_the_kinds_defaults_and_the_rest_stays() {
     assert_eq!(cfg.gate_confidence, None);
     assert_eq!(cfg.q11, ideal.q11);
     let text = "scenario = \"square\"\ngate_confidence = \"none\"\nencoder_gear = 2\n";
-    let ScenarioConfig::Square(cfg) = parse(text, Path::new("b.toml")).expect("parse");
+    let ScenarioConfig::Square(cfg) = parse(text, Path::new("b.toml")).expect("parse") else {
+        panic!("not a square scenario");
+    };
     assert_eq!(cfg.gate_confidence, None);
     assert_eq!(cfg.encoder_gear, 2.0);
     assert_eq!(cfg.noise, NoiseModel::Realistic);

@@ -7,6 +7,7 @@ mod demo;
 mod guide;
 mod output;
 mod plot;
+mod reproduce;
 mod run;
 
 use std::process::ExitCode;
@@ -27,9 +28,9 @@ enum Command {
     /// Run the paper-001 EKF along one wall of the square arena and compare it
     /// with odometry alone (a small built-in example until the simulator lands).
     Demo(demo::DemoArgs),
-    /// Run a closed-loop scenario of the simulator (controller, encoders, IR
-    /// pair, EKF against odometry alone), built-in or from a TOML scenario
-    /// file: prints a summary table and writes `log.csv` (as the run goes),
+    /// Run a closed-loop scenario of the simulator (square, square-ideal,
+    /// wall45, tricycle-slip, hover: robot, sensors, filter against
+    /// odometry alone), built-in or from a TOML scenario file: prints a summary table and writes `log.csv` (as the run goes),
     /// `metrics.json` and pictures (map, errors, covariance as PNG and SVG);
     /// with `--runs N`, a Monte Carlo over N seeds in parallel (table,
     /// `runs.csv`, `metrics.json`, no step log).
@@ -40,6 +41,11 @@ enum Command {
     /// measurable criterion (spec section 3); prints a table with PASS/FAIL
     /// and exits non-zero if a step fails.
     Guide(guide::GuideArgs),
+    /// Reproduce a table of the papers beside Locus's Monte Carlo results:
+    /// `table3` is paper 000's Table III (skid-steer robot, laser at the
+    /// 45-degree wall), with the paper's measurement Jacobian and with the
+    /// exact one.
+    Reproduce(reproduce::ReproduceArgs),
 }
 
 fn main() -> ExitCode {
@@ -48,6 +54,7 @@ fn main() -> ExitCode {
         Command::Demo(args) => demo::run(&args),
         Command::Run(args) => run::run(&args),
         Command::Guide(args) => guide::run(&args),
+        Command::Reproduce(args) => reproduce::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -18,10 +18,14 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use comfy_table::{Table, presets::UTF8_FULL};
+use locus_core::wrap_angle;
 use locus_models::laser_wall::Segment;
 use locus_sim::closed_loop::{SquareConfig, run_square};
+use locus_sim::hover::run_hover;
 use locus_sim::scenario::{Record, Sample, Summary};
 use locus_sim::scenario_file::{self, BUILTIN, ScenarioConfig};
+use locus_sim::tricycle_slip::{TricycleSlipRecord, room, run_tricycle_slip};
+use locus_sim::wall45::run_wall45;
 
 use crate::output::print_out;
 
@@ -172,6 +176,75 @@ pub fn run(args: &RunArgs) -> Result<()> {
             let info = square_info(&name, &cfg);
             execute(args, &info, &out, |seed, mut sink| {
                 run_square(&cfg, seed, &mut sink)
+            })
+        }
+        ScenarioConfig::Wall45(cfg) => {
+            let info = Info {
+                name,
+                title: "paper 000 skid-steer robot, laser at the 45-degree wall (Table III path)",
+                estimator: "EKF (odometry + laser)",
+                measurement: "laser",
+                dt: cfg.dt,
+                laps: None,
+                walls: locus_sim::World::wall45(cfg.wall_a).walls,
+            };
+            execute(args, &info, &out, |seed, mut sink| {
+                run_wall45(&cfg, seed, &mut sink)
+            })
+        }
+        ScenarioConfig::TricycleSlip(cfg) => {
+            let info = Info {
+                name,
+                title: "paper 004 tricycle with wheel slip (odometry row: rear wheels only)",
+                estimator: "EKF (rear odometry + laser)",
+                measurement: "laser",
+                dt: cfg.dt,
+                laps: None,
+                walls: room(cfg.room).walls,
+            };
+            // The slip-rejecting odometry's errors (the table's odometry row
+            // is the rear-only one), for the line printed after the table.
+            let slip_rejecting = std::sync::Mutex::new((0.0_f64, 0.0_f64, 0_usize));
+            execute(args, &info, &out, |seed, sink| {
+                run_tricycle_slip(&cfg, seed, &mut |r: &TricycleSlipRecord| {
+                    let t = &r.sample;
+                    let e2 = (t.truth[0] - r.slip_rejecting[0]).powi(2)
+                        + (t.truth[1] - r.slip_rejecting[1]).powi(2);
+                    let eth = wrap_angle(t.truth_heading - r.slip_rejecting[2]);
+                    if let Ok(mut acc) = slip_rejecting.lock() {
+                        acc.0 += e2;
+                        acc.1 += eth * eth;
+                        acc.2 += 1;
+                    }
+                    sink(r);
+                })
+            })?;
+            let (e2, eth2, n) = *slip_rejecting
+                .lock()
+                .map_err(|_| anyhow::anyhow!("a run panicked"))?;
+            if args.runs == 1 && n > 0 {
+                #[allow(clippy::cast_precision_loss)]
+                let n = n as f64;
+                print_out(&format!(
+                    "slip-rejecting odometry alone (paper 004): position RMSE {:.2} cm, heading RMSE {:.2} deg (the table's odometry row is rear-only)\n",
+                    100.0 * (e2 / n).sqrt(),
+                    (eth2 / n).sqrt().to_degrees()
+                ))?;
+            }
+            Ok(())
+        }
+        ScenarioConfig::Hover(cfg) => {
+            let info = Info {
+                name,
+                title: "paper 002 body hovering before the camera (6-DOF; heading = attitude error)",
+                estimator: "6-DOF estimator (camera marks)",
+                measurement: "camera",
+                dt: cfg.dt,
+                laps: None,
+                walls: Vec::new(),
+            };
+            execute(args, &info, &out, |seed, mut sink| {
+                run_hover(&cfg, seed, &mut sink)
             })
         }
     }

@@ -403,3 +403,152 @@ fn guide_prints_every_step_and_exits_with_the_verdict() {
         "{stderr}"
     );
 }
+
+/// Parses a column (1-based after the label) of a table row starting with
+/// `label` as a number.
+fn column(stdout: &str, label: &str, col: usize) -> f64 {
+    let row = stdout
+        .lines()
+        .find(|l| l.contains(label))
+        .unwrap_or_else(|| panic!("no row `{label}`:\n{stdout}"));
+    row.split('┆')
+        .nth(col)
+        .expect("column")
+        .trim()
+        .parse()
+        .unwrap_or_else(|_| panic!("not a number in `{row}`"))
+}
+
+#[test]
+fn the_papers_other_scenarios_run_from_their_names_and_from_files() {
+    for (scenario, estimator, odometry) in [
+        ("wall45", "EKF (odometry + laser)", true),
+        ("tricycle-slip", "EKF (rear odometry + laser)", true),
+        ("hover", "6-DOF estimator (camera marks)", false),
+    ] {
+        let dir = temp_dir(&format!("scenario-{scenario}"));
+        let out = locus(&[
+            "run",
+            scenario,
+            "--no-plots",
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{scenario}: {}\n{stdout}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let ekf = column(&stdout, estimator, 1);
+        assert!(ekf.is_finite() && ekf > 0.0, "{scenario}: {stdout}");
+        if odometry {
+            // Each scenario's filter beats its odometry alone on position.
+            assert!(
+                ekf < column(&stdout, "odometry alone", 1),
+                "{scenario}: {stdout}"
+            );
+        } else {
+            assert!(stdout.contains("n/a"), "{scenario}: {stdout}");
+        }
+        // The log has a header and one row per step, all of the same width.
+        let log = std::fs::read_to_string(dir.join("log.csv")).unwrap();
+        let mut lines = log.lines();
+        let width = lines.next().unwrap().split(',').count();
+        let rows: Vec<_> = lines.collect();
+        assert!(rows.len() > 10, "{scenario}: {} rows", rows.len());
+        assert!(rows.iter().all(|r| r.split(',').count() == width));
+
+        // Its --print-config template is a scenario file that runs the same.
+        std::fs::create_dir_all(&dir).unwrap();
+        let template = locus(&["run", scenario, "--print-config"]);
+        assert!(template.status.success());
+        let file = dir.join(format!("{scenario}.toml"));
+        std::fs::write(&file, &template.stdout).unwrap();
+        let again = locus(&[
+            "run",
+            file.to_str().unwrap(),
+            "--no-plots",
+            "--out",
+            dir.join("again").to_str().unwrap(),
+        ]);
+        assert!(
+            again.status.success(),
+            "{}",
+            String::from_utf8_lossy(&again.stderr)
+        );
+        assert_eq!(
+            std::fs::read_to_string(dir.join("again").join("log.csv")).unwrap(),
+            log,
+            "{scenario}: the template file does not reproduce the built-in run"
+        );
+    }
+}
+
+#[test]
+fn tricycle_slip_prints_rear_only_and_slip_rejecting_odometry() {
+    let dir = temp_dir("tricycle-both");
+    let out = locus(&[
+        "run",
+        "tricycle-slip",
+        "--no-plots",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}");
+    let rear_only = column(&stdout, "odometry alone", 1);
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("slip-rejecting odometry alone"))
+        .unwrap_or_else(|| panic!("no slip-rejecting line:\n{stdout}"));
+    let slip_rejecting: f64 = line
+        .split("position RMSE ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no figure in `{line}`"));
+    assert!(
+        slip_rejecting < rear_only,
+        "slip-rejecting {slip_rejecting} cm vs rear-only {rear_only} cm"
+    );
+}
+
+#[test]
+fn a_bad_value_in_a_wall45_file_names_the_line_and_field() {
+    let dir = temp_dir("wall45-bad");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("bad.toml");
+    std::fs::write(&file, "scenario = \"wall45\"\ndt = 0.1\nmax_range = -3.0\n").unwrap();
+    let out = locus(&["run", file.to_str().unwrap(), "--no-plots"]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("line 3") && stderr.contains("max_range"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn reproduce_table3_prints_the_paper_beside_both_models() {
+    let out = locus(&["reproduce", "table3"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}\n{stdout}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for row in [
+        "paper: real",
+        "paper: EKF",
+        "Locus: paper H",
+        "Locus: exact",
+        "Locus: odometry",
+    ] {
+        assert_eq!(
+            stdout.matches(row).count(),
+            6,
+            "`{row}` should appear at each of the six instants:\n{stdout}"
+        );
+    }
+}
