@@ -1,0 +1,13 @@
+//! Analysis tools of Locus, built on the papers' models.
+//!
+//! * [`doa`]: the domain of attraction of paper 002's continuous-time
+//!   observer (spec `MODELS.md` section 4): for each cell `(v_g, alpha)` of a
+//!   grid, the largest initial error `M_zeta` from which the observer still
+//!   converges from all 64 vertices of the error hypercube, and the worst
+//!   settling time at a fixed initial error. Configured from TOML, parallel
+//!   over cells (rayon), sliced into deterministic shards that merge back
+//!   exactly.
+//!
+//! Units are SI inside (m, rad, s); the paper's pixels are px.
+
+pub mod doa;
