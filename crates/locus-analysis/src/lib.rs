@@ -7,7 +7,14 @@
 //!   settling time at a fixed initial error. Configured from TOML, parallel
 //!   over cells (rayon), sliced into deterministic shards that merge back
 //!   exactly.
+//! * [`hw`]: a cycle-level model of the FPGA correction core of papers 000
+//!   and 003 (a state machine with states waiting, mult1, mult2, multadd,
+//!   add, div1 running the 11-step schedule of spec section 1), with
+//!   configurable operator latencies, number of parallel datapaths and clock.
+//!   It executes the arithmetic in `f32` in the schedule's order and counts
+//!   the floating-point operators the schedule needs.
 //!
 //! Units are SI inside (m, rad, s); the paper's pixels are px.
 
 pub mod doa;
+pub mod hw;
