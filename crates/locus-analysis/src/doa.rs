@@ -815,8 +815,8 @@ impl Study {
     }
 
     /// One run from `x_n + zeta0` with `P0 = v_g Q`, classified by the run
-    /// rules. `full` keeps stepping a converging run to the horizon (always
-    /// true here: convergence is judged at the end).
+    /// rules: it stops at the first failing step (divergence) and otherwise
+    /// runs the whole horizon, since convergence is judged at the end.
     pub fn run(
         &self,
         observer: &ContinuousObserver<f64, 6, 8>,
