@@ -4,7 +4,9 @@
 //! `locus-core` (the filter) and `locus-models` (the papers' models).
 
 mod demo;
+mod doa;
 mod guide;
+mod hw;
 mod output;
 mod plot;
 mod reproduce;
@@ -46,6 +48,12 @@ enum Command {
     /// 45-degree wall), with the paper's measurement Jacobian and with the
     /// exact one.
     Reproduce(reproduce::ReproduceArgs),
+    /// Domain of attraction of paper 002's observer over a (v_g, alpha)
+    /// grid: CSV, heatmaps, `--shard I/N` slices and `doa merge`.
+    Doa(doa::Args),
+    /// Cycle-level model of papers 000/003's FPGA correction core: cycles,
+    /// time and operators per correction, over 1..9 datapaths.
+    Hw(hw::Args),
 }
 
 fn main() -> ExitCode {
@@ -55,6 +63,8 @@ fn main() -> ExitCode {
         Command::Run(args) => run::run(&args),
         Command::Guide(args) => guide::run(&args),
         Command::Reproduce(args) => reproduce::run(&args),
+        Command::Doa(args) => doa::run(&args),
+        Command::Hw(args) => hw::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
