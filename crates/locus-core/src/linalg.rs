@@ -24,11 +24,12 @@ pub(crate) fn mul<T: Scalar, const R: usize, const K: usize, const C: usize>(
 ) -> SMatrix<T, R, C> {
     let mut out = SMatrix::<T, R, C>::zeros();
     for j in 0..C {
-        for k in 0..K {
-            let bkj = b[(k, j)];
-            for i in 0..R {
-                out[(i, j)] += a[(i, k)] * bkj;
+        for i in 0..R {
+            let mut acc = T::zero();
+            for k in 0..K {
+                acc += a[(i, k)] * b[(k, j)];
             }
+            out[(i, j)] = acc;
         }
     }
     out
@@ -42,11 +43,12 @@ pub(crate) fn mul_bt<T: Scalar, const R: usize, const K: usize, const C: usize>(
 ) -> SMatrix<T, R, C> {
     let mut out = SMatrix::<T, R, C>::zeros();
     for j in 0..C {
-        for k in 0..K {
-            let bjk = b[(j, k)];
-            for i in 0..R {
-                out[(i, j)] += a[(i, k)] * bjk;
+        for i in 0..R {
+            let mut acc = T::zero();
+            for k in 0..K {
+                acc += a[(i, k)] * b[(j, k)];
             }
+            out[(i, j)] = acc;
         }
     }
     out
@@ -70,7 +72,8 @@ pub(crate) fn sandwich<T: Scalar, const R: usize, const K: usize>(
 }
 
 /// The inverse of a symmetric positive-definite matrix, or `None` if it is
-/// not positive definite (or not finite). Closed form for 1x1 and 2x2
+/// not positive definite, numerically singular (a pivot or determinant below
+/// machine epsilon relative to its diagonal) or not finite. Closed form for 1x1 and 2x2
 /// (positive-definiteness by `s00 > 0` and `det > 0`); an LDL^T
 /// factorisation (no square roots) above.
 #[inline(always)]
@@ -87,7 +90,10 @@ pub(crate) fn spd_inverse<T: Scalar, const M: usize>(
         2 => {
             let (a, b, c, d) = (s[(0, 0)], s[(0, 1)], s[(1, 0)], s[(1, 1)]);
             let det = a * d - b * c;
-            if !(a > zero && det > zero && finite(det)) {
+            // Numerically singular (condition number beyond 1/eps) counts as
+            // not positive definite: its inverse would be rounding noise, and
+            // bounding it keeps the gain finite for finite inputs.
+            if !(a > zero && det > a * d * T::default_epsilon() && finite(det)) {
                 return None;
             }
             let inv_det = T::one() / det;
@@ -113,7 +119,8 @@ fn ldlt_inverse<T: Scalar, const M: usize>(s: &SMatrix<T, M, M>) -> Option<SMatr
         for k in 0..j {
             dj -= l[(j, k)] * l[(j, k)] * d[k];
         }
-        if !(dj > zero && finite(dj)) {
+        // A pivot below eps times its diagonal entry: numerically singular.
+        if !(dj > zero && dj > s[(j, j)] * T::default_epsilon() && finite(dj)) {
             return None;
         }
         d[j] = dj;

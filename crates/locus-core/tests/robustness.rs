@@ -224,3 +224,37 @@ fn errors_display_what_went_wrong() {
         "innovation covariance S is not positive definite"
     );
 }
+
+/// A numerically singular S (two measurements of the same coordinate whose
+/// noises have correlation 1 - eps/2, the largest f64 below 1: det S is
+/// about eps/2 relative to its diagonal) is reported as not positive
+/// definite, and no posterior is produced from its rounding noise; a well
+/// conditioned S (correlation 0.9) is applied and finite.
+#[test]
+fn numerically_singular_innovation_covariance_is_an_error() {
+    let b = Belief::new(
+        SVector::<f64, 3>::new(0.1, 0.2, 0.3),
+        SMatrix::<f64, 3, 3>::identity() * 1e-4,
+    );
+    let ekf = Ekf::<f64>::new(CovarianceUpdate::Plain);
+    let z = Vector2::new(0.1, 0.1);
+    let same_coordinate = |rho: f64| Raw {
+        h: SMatrix::<f64, 2, 3>::new(1.0, 0.0, 0.0, 1.0, 0.0, 0.0),
+        r: SMatrix::<f64, 2, 2>::new(1e-4, rho * 1e-4, rho * 1e-4, 1e-4),
+        valid: true,
+    };
+    assert_eq!(
+        ekf.correct(&b, &same_coordinate(1.0 - f64::EPSILON / 2.0), &z),
+        Err(Error::InnovationNotPositiveDefinite)
+    );
+    // Correlation 0.9: S is well conditioned, the update is applied.
+    let c = ekf.correct(&b, &same_coordinate(0.9), &z).unwrap();
+    assert!(c.applied);
+    assert!(
+        c.belief
+            .x
+            .iter()
+            .chain(c.belief.p.iter())
+            .all(|v| v.is_finite())
+    );
+}

@@ -255,19 +255,24 @@ impl<T: Scalar> MeasurementModel<T, 3, 2> for IrPairObservation<T> {
         _x: &SVector<T, 3>,
         p: &SMatrix<T, 3, 3>,
     ) -> (SMatrix<T, 3, 2>, SMatrix<T, 2, 2>) {
-        let k = match self.wall.axis {
-            WallAxis::X => 0,
-            WallAxis::Y => 1,
+        // One arm per axis, so every index is a constant and P can stay in
+        // registers.
+        let select = |k: usize| {
+            let pht = SMatrix::<T, 3, 2>::new(
+                p[(0, k)],
+                p[(0, 2)],
+                p[(1, k)],
+                p[(1, 2)],
+                p[(2, k)],
+                p[(2, 2)],
+            );
+            let hph = Matrix2::new(p[(k, k)], p[(k, 2)], p[(2, k)], p[(2, 2)]);
+            (pht, hph)
         };
-        let pht = SMatrix::<T, 3, 2>::new(
-            p[(0, k)],
-            p[(0, 2)],
-            p[(1, k)],
-            p[(1, 2)],
-            p[(2, k)],
-            p[(2, 2)],
-        );
-        let hph = Matrix2::new(p[(k, k)], p[(k, 2)], p[(2, k)], p[(2, 2)]);
+        let (pht, hph) = match self.wall.axis {
+            WallAxis::X => select(0),
+            WallAxis::Y => select(1),
+        };
         (pht, hph)
     }
 }
