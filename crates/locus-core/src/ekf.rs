@@ -363,8 +363,7 @@ where
     T: Scalar,
     Me: MeasurementModel<T, N, M>,
 {
-    let z_hat = model.h(&belief.x)?;
-    let mut h = model.jacobian(&belief.x);
+    let (z_hat, mut h) = model.linearize(&belief.x)?;
     let mut r = model.noise(&belief.x);
     // Missing components of z may hold anything (even NaN): replace them by the
     // prediction before forming the residual, then neutralise them.

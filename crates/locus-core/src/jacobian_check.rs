@@ -142,7 +142,8 @@ where
     compare("linearize W", &w, &model.jacobian_noise(x, u), tol)
 }
 
-/// Checks a measurement model's `H = dh/dX` at `x`.
+/// Checks a measurement model's `H = dh/dX` at `x`, and that its
+/// `linearize` agrees with `h` and `H`.
 ///
 /// Returns `Ok(false)` without checking if the model has no measurement at
 /// `x` or at one of the perturbed points (so random test points near the edge
@@ -165,6 +166,24 @@ where
         return Ok(false);
     };
     compare("H", &model.jacobian(x), &num, tol)?;
+    // An overridden `linearize` must agree with the separate methods.
+    let Some((z_hat, h)) = model.linearize(x) else {
+        return Err(Mismatch {
+            jacobian: "linearize h (None where h is Some)",
+            row: 0,
+            col: 0,
+            analytic: T::zero(),
+            numeric: T::zero(),
+        });
+    };
+    let h0 = model.h(x).expect("checked above");
+    compare(
+        "linearize h",
+        &SMatrix::<T, M, 1>::from_column_slice(z_hat.as_slice()),
+        &SMatrix::<T, M, 1>::from_column_slice(h0.as_slice()),
+        tol,
+    )?;
+    compare("linearize H", &h, &model.jacobian(x), tol)?;
     Ok(true)
 }
 

@@ -119,6 +119,17 @@ pub trait MeasurementModel<T: Scalar, const N: usize, const M: usize> {
         z - z_hat
     }
 
+    /// `(h(X), H)` together, `None` where [`h`](Self::h) is `None`. The
+    /// default calls the two methods; override it to share work between
+    /// them (a camera model computes its rotation once instead of twice).
+    /// [`crate::jacobian_check::check_measurement_model`] verifies that an
+    /// override agrees with the separate methods.
+    #[inline(always)]
+    fn linearize(&self, x: &SVector<T, N>) -> Option<(SVector<T, M>, SMatrix<T, M, N>)> {
+        let z_hat = self.h(x)?;
+        Some((z_hat, self.jacobian(x)))
+    }
+
     /// The covariance projections `(P H^T, H P H^T)` at `x` that the
     /// correction needs (spec section 1, eq. 3-4: `S = H P H^T + V R V^T`,
     /// `G = P H^T S^-1`).

@@ -365,6 +365,33 @@ impl<T: Scalar, const M: usize, const D: usize> MeasurementModel<T, 6, D> for Ca
 
     /// `C = dh/dx` (`D x 6`, px/m and px/rad), eq. 18 per mark with the
     /// spec's fixed `dR/dtheta`, rows `2j, 2j + 1` for mark `j`.
+    /// `h` and `C` with one rotation (shared by both).
+    fn linearize(&self, x: &SVector<T, 6>) -> Option<(SVector<T, D>, SMatrix<T, D, 6>)> {
+        let () = Self::DIMENSION_IS_TWICE_THE_MARKS;
+        let rot = EulerRotation::from_state(x);
+        let t = Vector3::new(x[0], x[1], x[2]);
+        let mut y = SVector::<T, D>::zeros();
+        let mut c = SMatrix::<T, D, 6>::zeros();
+        for (j, xo) in self.marks.iter().enumerate() {
+            let rxo = rot.r * xo;
+            let xc = t + rxo;
+            // A non-finite depth (NaN) is no measurement either.
+            if !xc[2].is_finite() || xc[2] <= self.min_depth {
+                return None;
+            }
+            let p = self.intrinsics.project(&xc);
+            y[2 * j] = p[0];
+            y[2 * j + 1] = p[1];
+            let jp = self.intrinsics.project_jacobian(&xc);
+            let mut block = c.fixed_view_mut::<2, 6>(2 * j, 0);
+            block.fixed_view_mut::<2, 3>(0, 0).copy_from(&jp);
+            block.set_column(3, &(jp * rot.d_phi(xo)));
+            block.set_column(4, &(jp * rot.d_theta(xo)));
+            block.set_column(5, &(jp * Vector3::new(-rxo[1], rxo[0], T::zero())));
+        }
+        Some((y, c))
+    }
+
     fn jacobian(&self, x: &SVector<T, 6>) -> SMatrix<T, D, 6> {
         let () = Self::DIMENSION_IS_TWICE_THE_MARKS;
         let rot = EulerRotation::from_state(x);
