@@ -6,8 +6,8 @@
 //! [`locus_sim::closed_loop::run_square`], with the robot across a socket.
 //!
 //! # Loop
-//! 1. Send a zero-speed command (sequence 0, ack [`NO_ACK`]) every
-//!    `resend` until the first telemetry packet arrives.
+//! 1. Send a zero-speed command (ack [`NO_ACK`]) every `resend` until the
+//!    first telemetry packet arrives.
 //! 2. For each datagram from the robot's address: decode and classify it
 //!    ([`Receiver`]). Dropped classes (duplicate, late, corrupt, malformed)
 //!    only count. The first applied packet sets the reference encoder
