@@ -36,7 +36,7 @@ step "docs (-D warnings)"
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace --locked
 
 step "no_std build for thumbv7em-none-eabihf"
-cargo build --locked -p locus-core -p locus-models -p locus-odometry -p locus-control --no-default-features --target thumbv7em-none-eabihf
+cargo build --locked -p locus-core -p locus-models -p locus-odometry -p locus-control -p locus-link --no-default-features --target thumbv7em-none-eabihf
 
 step "tests (optimised test profile)"
 cargo test --workspace --locked

@@ -6,10 +6,13 @@
 mod demo;
 mod doa;
 mod guide;
+mod host;
 mod hw;
+mod link_scenario;
 mod output;
 mod plot;
 mod reproduce;
+mod robot;
 mod run;
 
 use std::process::ExitCode;
@@ -54,6 +57,15 @@ enum Command {
     /// Cycle-level model of papers 000/003's FPGA correction core: cycles,
     /// time and operators per correction, over 1..9 datapaths.
     Hw(hw::Args),
+    /// The simulator as a robot on UDP (paper 001's link): sends encoder
+    /// counts and IR readings at the sensor rate, applies the wheel speeds
+    /// it receives, stops when they stop (watchdog). Protocol:
+    /// docs/protocol.md.
+    Robot(robot::Args),
+    /// The localisation and control host for a robot speaking the link
+    /// protocol: EKF, path controller, wheel commands; reports lost,
+    /// duplicate, late, corrupt and malformed packets and the robot's clock.
+    Host(host::Args),
 }
 
 fn main() -> ExitCode {
@@ -65,6 +77,8 @@ fn main() -> ExitCode {
         Command::Reproduce(args) => reproduce::run(&args),
         Command::Doa(args) => doa::run(&args),
         Command::Hw(args) => hw::run(&args),
+        Command::Robot(args) => robot::run(&args),
+        Command::Host(args) => host::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

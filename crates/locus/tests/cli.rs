@@ -552,3 +552,42 @@ fn reproduce_table3_prints_the_paper_beside_both_models() {
         );
     }
 }
+
+/// `locus robot` and `locus host` talk over loopback: the host drives the
+/// two laps and reports a clean link; the robot reports its watchdog stop.
+#[test]
+fn robot_and_host_run_the_square_over_udp() {
+    // A free port for the robot (released, then bound by the robot).
+    let port = std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let addr = format!("127.0.0.1:{port}");
+    let robot_addr = addr.clone();
+    let robot = std::thread::spawn(move || {
+        Command::new(env!("CARGO_BIN_EXE_locus"))
+            .args(["robot", "--udp", &robot_addr, "--time-scale", "50"])
+            .output()
+    });
+    let host = locus(&["host", "--robot", &addr]);
+    let robot = robot.join().unwrap().unwrap();
+    let host_out = String::from_utf8_lossy(&host.stdout);
+    let robot_out = String::from_utf8_lossy(&robot.stdout);
+    assert!(
+        host.status.success(),
+        "{}",
+        String::from_utf8_lossy(&host.stderr)
+    );
+    assert!(
+        robot.status.success(),
+        "{}",
+        String::from_utf8_lossy(&robot.stderr)
+    );
+    assert!(host_out.contains("2 laps"), "{host_out}");
+    assert!(
+        host_out.contains("| packets corrupt / malformed [count]"),
+        "{host_out}"
+    );
+    assert!(robot_out.contains("watchdog stops"), "{robot_out}");
+}

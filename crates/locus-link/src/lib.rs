@@ -1,0 +1,16 @@
+#![doc = include_str!("../README.md")]
+#![no_std]
+#![forbid(unsafe_code)]
+
+pub mod clock;
+pub mod error;
+pub mod packet;
+pub mod receiver;
+
+pub use clock::{ClockEstimator, ClockFit};
+pub use error::Error;
+pub use packet::{
+    COMMAND_LEN, Command, MAGIC, MAX_BEAMS, MAX_PACKET, NO_ACK, Packet, TELEMETRY_MIN_LEN,
+    Telemetry, VERSION, decode,
+};
+pub use receiver::{Counters, Receiver, Status};

@@ -1,0 +1,335 @@
+//! The localisation and control host for any robot that speaks the
+//! protocol (`docs/protocol.md`).
+//!
+//! The filter is paper 001's, configured by a [`SquareConfig`] (wheelbase,
+//! encoder, IR pair, `Q`, `R`, gate, path controller): the same steps as
+//! [`locus_sim::closed_loop::run_square`], with the robot across a socket.
+//!
+//! # Loop
+//! 1. Send a zero-speed command (ack [`NO_ACK`]) every `resend` until the
+//!    first telemetry packet arrives.
+//! 2. For each datagram from the robot's address: decode and classify it
+//!    ([`Receiver`]). Dropped classes (duplicate, late, corrupt, malformed)
+//!    only count. The first applied packet sets the reference encoder
+//!    counts. Every later one: the wrapping count differences give the
+//!    wheel travels since the last applied packet; with `g` sequence
+//!    numbers skipped they are split into `g + 1` equal predictions
+//!    (predicting through the gap); the IR reading, if any, is associated
+//!    with a wall and corrects the EKF (gated); the clock estimator gets
+//!    (robot timestamp, receive time).
+//! 3. The path controller maps the estimate to wheel speeds; a command
+//!    acknowledging the packet is sent. When the laps are done the host
+//!    stops sending (the robot's watchdog stops the wheels) and keeps
+//!    receiving and counting until the robot has been quiet for `quiet`.
+
+use core::net::SocketAddr;
+use core::time::Duration;
+use std::net::UdpSocket;
+use std::time::Instant;
+
+use locus_control::{Controller, FollowPath, wheel_speeds};
+use locus_core::nalgebra::{Matrix3, Vector3};
+use locus_core::{Belief, ChiSquareGate, Ekf};
+use locus_link::clock::ClockFit;
+use locus_link::{
+    ClockEstimator, Command, Counters, MAX_PACKET, NO_ACK, Receiver, Status, Telemetry,
+};
+use locus_models::{DiffDrive, IrPair, IrPairObservation, WheelTravel, associate_ir_wall};
+use locus_odometry::Wheel as EncoderWheel;
+use locus_sim::closed_loop::SquareConfig;
+use locus_sim::world::World;
+
+use crate::{Error, at_least_1us, is_timeout};
+
+/// Buckets in the clock estimator's window.
+const CLOCK_WINDOW: usize = 64;
+
+/// Configuration of the host.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HostConfig {
+    /// The robot, its sensors, the filter and the controller.
+    pub square: SquareConfig,
+    /// Interval of the handshake's zero-speed command. Default 50 ms.
+    pub resend: Duration,
+    /// Wall time to wait for the robot's first telemetry. Default 10 s.
+    pub handshake: Duration,
+    /// Wall time without telemetry after which the run ends (after the laps
+    /// are done, or if the robot goes silent). Default 0.5 s.
+    pub quiet: Duration,
+    /// Bucket of the clock estimator's minimum-delay filter (s of host
+    /// time); the window is 64 buckets. Default 0.05 s.
+    pub clock_bucket: f64,
+}
+
+impl Default for HostConfig {
+    fn default() -> Self {
+        Self {
+            square: SquareConfig::default(),
+            resend: Duration::from_millis(50),
+            handshake: Duration::from_secs(10),
+            quiet: Duration::from_millis(500),
+            clock_bucket: 0.05,
+        }
+    }
+}
+
+/// The host's state after one applied telemetry packet.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HostStep {
+    /// Sequence of the packet.
+    pub sequence: u32,
+    /// Robot timestamp of the packet (s).
+    pub robot_time: f64,
+    /// Sequence numbers skipped before it (predicted through).
+    pub skipped: u32,
+    /// EKF estimate `[x, y, theta]` (m, m, rad) after the packet.
+    pub estimate: [f64; 3],
+    /// EKF covariance diagonal (m^2, m^2, rad^2).
+    pub variance: [f64; 3],
+    /// IR reading `[d_s1, d_s2]` (m), if any.
+    pub ir: Option<[f32; 2]>,
+    /// Whether an IR correction was applied (associated and gated in).
+    pub corrected: bool,
+    /// Wheel speeds sent `[right, left]` (m/s); `None` once the path is
+    /// done.
+    pub command: Option<[f32; 2]>,
+}
+
+/// What a host run did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HostReport {
+    /// The telemetry receiver's counters.
+    pub counters: Counters,
+    /// Estimate after each applied packet `(sequence, [x, y, theta])`.
+    pub estimates: Vec<(u32, [f64; 3])>,
+    /// The clock fit at the end (`robot = offset + (1 + drift) host`, host
+    /// time in s since the handshake started).
+    pub clock: Option<ClockFit>,
+    /// Laps of the path completed.
+    pub laps: usize,
+    /// Commands sent (handshake included).
+    pub commands_sent: u64,
+    /// IR corrections applied.
+    pub corrections: u64,
+    /// Wall time from a telemetry packet's reception to its command's send
+    /// (s), one per command sent after the handshake.
+    pub latency: Vec<f64>,
+}
+
+/// The filter side of the loop.
+struct Filter {
+    cfg: SquareConfig,
+    ekf: Ekf<f64>,
+    model: DiffDrive<f64>,
+    wheel: EncoderWheel<f64>,
+    pair: IrPair<f64>,
+    world: World,
+    belief: Belief<f64, 3>,
+    reference: Option<[u32; 2]>,
+}
+
+impl Filter {
+    fn new(cfg: &SquareConfig) -> Result<Self, Error> {
+        cfg.validate()?;
+        let mut ekf = Ekf::<f64>::default();
+        if let Some(c) = cfg.gate_confidence {
+            ekf = ekf.with_gate(ChiSquareGate::new(c)?);
+        }
+        let (s, sd) = (cfg.start, cfg.initial_std);
+        let x0 = Vector3::new(s[0], s[1], s[2]);
+        let p0 = Matrix3::from_diagonal(&Vector3::new(sd[0] * sd[0], sd[1] * sd[1], sd[2] * sd[2]));
+        Ok(Self {
+            cfg: *cfg,
+            ekf,
+            model: DiffDrive::new(cfg.wheelbase, cfg.q11, cfg.q22),
+            wheel: EncoderWheel::new(cfg.encoder_lines, cfg.encoder_gear, cfg.wheel_radius),
+            pair: IrPair::centred(cfg.ir_spacing),
+            world: World::square_arena(),
+            belief: Belief::new(x0, p0),
+            reference: None,
+        })
+    }
+
+    /// Applies one telemetry packet that skipped `skipped` sequence
+    /// numbers; returns whether an IR correction was applied.
+    #[allow(clippy::cast_possible_wrap)]
+    fn apply(&mut self, t: &Telemetry, skipped: u32) -> Result<bool, Error> {
+        let Some(reference) = self.reference.replace(t.counts) else {
+            return Ok(false);
+        };
+        let d = |i: usize| {
+            self.wheel
+                .distance(t.counts[i].wrapping_sub(reference[i]) as i32)
+        };
+        let parts = f64::from(skipped) + 1.0;
+        let u = WheelTravel {
+            d1: d(0) / parts,
+            d2: d(1) / parts,
+        };
+        for _ in 0..=skipped {
+            self.belief = self.ekf.predict(&self.belief, &self.model, &u)?;
+        }
+        let Some([ds1, ds2]) = t.ir.filter(|_| self.cfg.use_ir) else {
+            return Ok(false);
+        };
+        let Some(wall) = associate_ir_wall(
+            &self.belief.x,
+            &self.pair,
+            &self.world.walls,
+            self.cfg.association_range,
+        ) else {
+            return Ok(false);
+        };
+        let obs = IrPairObservation {
+            pair: self.pair,
+            wall,
+            ds1: f64::from(ds1),
+            ds2: f64::from(ds2),
+            r11: self.cfg.r11,
+            r22: self.cfg.r22,
+        };
+        let c = self.ekf.correct(&self.belief, &obs, &obs.z())?;
+        self.belief = c.belief;
+        Ok(c.applied)
+    }
+}
+
+/// Runs the host on `socket`, talking to the robot at `robot`, calling
+/// `on_step` after each applied telemetry packet.
+///
+/// # Errors
+/// [`Error::Timeout`] if no telemetry arrives within `handshake`; socket,
+/// configuration and filter errors.
+#[allow(clippy::cast_possible_truncation, clippy::too_many_lines)]
+pub fn run_host(
+    socket: &UdpSocket,
+    robot: SocketAddr,
+    cfg: &HostConfig,
+    on_step: &mut impl FnMut(&HostStep),
+) -> Result<HostReport, Error> {
+    let mut filter = Filter::new(&cfg.square)?;
+    let mut controller = FollowPath::square(cfg.square.control);
+    let mut receiver = Receiver::new();
+    let mut clock = ClockEstimator::<CLOCK_WINDOW>::new(cfg.clock_bucket);
+    let mut buf = [0u8; 2048];
+    let mut out = [0u8; MAX_PACKET];
+    let mut report = HostReport {
+        counters: Counters::default(),
+        estimates: Vec::new(),
+        clock: None,
+        laps: 0,
+        commands_sent: 0,
+        corrections: 0,
+        latency: Vec::new(),
+    };
+    let mut sequence = 0u32;
+    let mut send = |socket: &UdpSocket, ack: u32, right: f32, left: f32| -> Result<(), Error> {
+        let c = Command {
+            sequence,
+            ack,
+            right,
+            left,
+        };
+        let n = c.encode(&mut out).map_err(Error::Encode)?;
+        socket.send_to(&out[..n], robot)?;
+        sequence = sequence.wrapping_add(1);
+        Ok(())
+    };
+
+    let origin = Instant::now();
+    let handshake_end = origin + cfg.handshake;
+    let mut next_hello = origin;
+    let mut last_rx: Option<Instant> = None;
+    let mut done = false;
+    loop {
+        let now = Instant::now();
+        // Waiting for the first packet: resend the hello; else: quiet end.
+        let wait = match last_rx {
+            None => {
+                if now >= handshake_end {
+                    return Err(Error::Timeout("waiting for the robot's first telemetry"));
+                }
+                if now >= next_hello {
+                    send(socket, NO_ACK, 0.0, 0.0)?;
+                    report.commands_sent += 1;
+                    next_hello = now + cfg.resend;
+                }
+                next_hello.min(handshake_end) - now
+            }
+            Some(t) => {
+                let end = t + cfg.quiet;
+                if now >= end {
+                    break;
+                }
+                end - now
+            }
+        };
+        socket.set_read_timeout(Some(at_least_1us(wait)))?;
+        let (n, from) = match socket.recv_from(&mut buf) {
+            Ok(r) => r,
+            Err(e) if is_timeout(&e) => continue,
+            // A hello sent before the robot bound its port comes back as
+            // "connection refused" on some systems: keep trying.
+            Err(e) if e.kind() == std::io::ErrorKind::ConnectionRefused => continue,
+            Err(e) => return Err(e.into()),
+        };
+        let received = Instant::now();
+        if from != robot {
+            continue;
+        }
+        let Ok((t, status)) = receiver.receive_telemetry(&buf[..n]) else {
+            last_rx.get_or_insert(received);
+            continue;
+        };
+        if last_rx.is_none() && !matches!(status, Status::Applied { .. }) {
+            continue;
+        }
+        last_rx = Some(received);
+        let Status::Applied { skipped } = status else {
+            continue;
+        };
+        let robot_time = t.timestamp_us as f64 * 1e-6;
+        clock.push(robot_time, (received - origin).as_secs_f64());
+        let corrected = filter.apply(&t, skipped)?;
+        report.corrections += u64::from(corrected);
+        let x = filter.belief.x;
+        report.estimates.push((t.sequence, [x[0], x[1], x[2]]));
+
+        let mut sent = None;
+        if !done {
+            let est = locus_control::Pose::new(x[0], x[1], x[2]);
+            let mut command = controller.command(est);
+            if command.done {
+                report.laps += 1;
+                if report.laps >= cfg.square.laps {
+                    done = true;
+                } else {
+                    controller.reset();
+                    command = controller.command(est);
+                }
+            }
+            if !done {
+                let (v1, v2) = wheel_speeds(command, cfg.square.wheelbase);
+                let (right, left) = (v1 as f32, v2 as f32);
+                send(socket, t.sequence, right, left)?;
+                report.commands_sent += 1;
+                report.latency.push(received.elapsed().as_secs_f64());
+                sent = Some([right, left]);
+            }
+        }
+        let p = filter.belief.p;
+        on_step(&HostStep {
+            sequence: t.sequence,
+            robot_time,
+            skipped,
+            estimate: [x[0], x[1], x[2]],
+            variance: [p[(0, 0)], p[(1, 1)], p[(2, 2)]],
+            ir: t.ir,
+            corrected,
+            command: sent,
+        });
+    }
+    report.counters = receiver.counters();
+    report.clock = clock.estimate();
+    Ok(report)
+}

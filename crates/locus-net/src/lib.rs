@@ -1,0 +1,58 @@
+//! The robot link of paper 001 over UDP (protocol: `docs/protocol.md`,
+//! codec: [`locus_link`]).
+//!
+//! - [`robot`]: the `square` simulator as a robot endpoint. It ticks at the
+//!   sensor rate (faster than real time with a time scale), sends telemetry,
+//!   applies the wheel commands it receives and stops the wheels when they
+//!   stop coming (watchdog).
+//! - [`host`]: the localisation and control loop for any robot that speaks
+//!   the protocol: decode, classify, predict (through gaps), correct with
+//!   the IR pair, run the path controller, send commands; it reports the
+//!   receiver's counters and the clock estimate.
+//!
+//! Both take an already bound [`std::net::UdpSocket`], so a caller chooses
+//! the address (the CLI binds `127.0.0.1` by default) and tests can put a
+//! proxy between them.
+
+pub mod host;
+pub mod robot;
+
+use core::time::Duration;
+
+/// Errors of a link endpoint.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A socket operation failed.
+    #[error("socket: {0}")]
+    Io(#[from] std::io::Error),
+    /// A packet could not be encoded (a non-finite value).
+    #[error("encode: {0}")]
+    Encode(locus_link::Error),
+    /// The simulated robot or its configuration failed.
+    #[error("simulator: {0}")]
+    Sim(#[from] locus_sim::closed_loop::Error),
+    /// The filter failed.
+    #[error("filter: {0}")]
+    Filter(#[from] locus_core::Error),
+    /// The peer did not answer in time; the text says which step.
+    #[error("timed out: {0}")]
+    Timeout(&'static str),
+    /// A configuration value is invalid; the text names it.
+    #[error("invalid configuration: {0}")]
+    Config(&'static str),
+}
+
+/// `d` clamped to at least 1 us (a zero read timeout is an error for
+/// [`std::net::UdpSocket::set_read_timeout`]).
+pub(crate) fn at_least_1us(d: Duration) -> Duration {
+    d.max(Duration::from_micros(1))
+}
+
+/// `true` for the error kinds a read timeout produces.
+pub(crate) fn is_timeout(e: &std::io::Error) -> bool {
+    matches!(
+        e.kind(),
+        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+    )
+}

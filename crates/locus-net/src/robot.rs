@@ -1,0 +1,317 @@
+//! The `square` simulator as a robot endpoint.
+//!
+//! The robot is built exactly as [`locus_sim::closed_loop::run_square`]
+//! builds it (same random draws in the same order from the same seed: true
+//! start, slip bumps, then per step the right and left encoders and the IR
+//! pair), so a run through the link with every command on time drives the
+//! same robot as the in-process run. Only the realistic noise model is
+//! simulated (the `square` scenario).
+//!
+//! # Loop
+//! 1. Wait (up to `handshake` of wall time) for a first valid command; its
+//!    source becomes the host's address.
+//! 2. Send telemetry 0: time 0, encoder counts 0, no readings.
+//! 3. Every tick `k = 1, 2, ...` (robot time `k dt`, wall time
+//!    `k dt / time_scale` after the handshake): apply the newest command
+//!    received (watchdog: zero speeds if none for `watchdog` s of robot
+//!    time), move the robot `dt`, advance the encoders, read the IR pair,
+//!    send telemetry `k`. Commands are received while waiting for the tick.
+//! 4. End after `idle_exit` s of robot time without a command, or at
+//!    `max_time` of the scenario.
+
+use core::net::SocketAddr;
+use core::time::Duration;
+use std::net::UdpSocket;
+use std::time::Instant;
+
+use locus_link::{Command as LinkCommand, MAX_PACKET, Receiver, Status, Telemetry};
+use locus_odometry::{Wheel as EncoderWheel, wrapping_diff};
+use locus_sim::closed_loop::{Error as SimError, NoiseModel, SquareConfig};
+use locus_sim::robot::{Command, Kinematics, Pose, Robot, SlipSchedule, Wheel};
+use locus_sim::sensors::{Encoder, IrPairSensor, SharpIr};
+use locus_sim::world::World;
+use rand::SeedableRng;
+use rand::rngs::StdRng;
+use rand_distr::{Distribution, StandardNormal};
+
+use crate::{Error, at_least_1us, is_timeout};
+
+/// Width of the simulated encoders' wrapping counter (bits).
+const COUNTER_BITS: u32 = locus_odometry::counter::PAPER_BITS;
+
+/// Longest sleep between two polls of the socket while waiting for a tick.
+const POLL: Duration = Duration::from_micros(50);
+
+/// Configuration of the robot endpoint.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RobotConfig {
+    /// The scenario (robot, sensors, `dt`, `max_time`).
+    pub square: SquareConfig,
+    /// Seed of the simulation's random draws.
+    pub seed: u64,
+    /// Robot seconds per wall second (> 0; 1: real time).
+    pub time_scale: f64,
+    /// Robot time without a command after which the wheels stop (s).
+    /// Default 0.2 s.
+    pub watchdog: f64,
+    /// Robot time without a command after which the run ends (s). Default
+    /// 2 s.
+    pub idle_exit: f64,
+    /// Wall time to wait for the host's first command. Default 10 s.
+    pub handshake: Duration,
+}
+
+impl Default for RobotConfig {
+    fn default() -> Self {
+        Self {
+            square: SquareConfig::default(),
+            seed: 1,
+            time_scale: 1.0,
+            watchdog: 0.2,
+            idle_exit: 2.0,
+            handshake: Duration::from_secs(10),
+        }
+    }
+}
+
+/// What a robot run did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobotReport {
+    /// True pose after each telemetry packet `(sequence, pose)` (sequence
+    /// 0: the start).
+    pub truth: Vec<(u32, Pose)>,
+    /// Telemetry packets sent.
+    pub sent: u64,
+    /// The command receiver's counters.
+    pub commands: locus_link::Counters,
+    /// Times the watchdog stopped the wheels.
+    pub watchdog_stops: u64,
+    /// Ticks whose command answered the previous telemetry packet (ack
+    /// `k - 1` at tick `k`): the lockstep share is `on_time / ticks`.
+    pub on_time: u64,
+    /// Ticks simulated (after telemetry 0).
+    pub ticks: u64,
+    /// Robot time simulated (s).
+    pub sim_time: f64,
+}
+
+/// Everything simulated, built as `run_square` builds it.
+struct Sim {
+    robot: Robot,
+    enc: [Encoder; 2],
+    last: [u32; 2],
+    counts: [u32; 2],
+    ir: IrPairSensor,
+    world: World,
+    rng: StdRng,
+    right_scale: f64,
+}
+
+impl Sim {
+    fn new(cfg: &SquareConfig, seed: u64) -> Result<Self, SimError> {
+        cfg.validate()?;
+        if cfg.noise != NoiseModel::Realistic {
+            return Err(SimError::Config(
+                "the robot endpoint simulates the realistic noise model only",
+            ));
+        }
+        let mut rng = StdRng::seed_from_u64(seed);
+        let mut draw = |std: f64| -> f64 {
+            let n: f64 = StandardNormal.sample(&mut rng);
+            std * n
+        };
+        let (s, sd) = (cfg.start, cfg.initial_std);
+        let true_start = Pose::new(s[0] + draw(sd[0]), s[1] + draw(sd[1]), s[2] + draw(sd[2]));
+        let lap_length = 8.0 * locus_control::SQUARE_HALF_SIDE;
+        let mut slip = SlipSchedule::random_bumps(
+            &mut rng,
+            Wheel::Left,
+            (0.0, lap_length),
+            cfg.slip_bumps_per_wheel,
+            cfg.slip_length,
+            cfg.slip_scale,
+        );
+        for z in SlipSchedule::random_bumps(
+            &mut rng,
+            Wheel::Right,
+            (0.0, lap_length),
+            cfg.slip_bumps_per_wheel,
+            cfg.slip_length,
+            cfg.slip_scale,
+        )
+        .zones
+        {
+            slip.push(z);
+        }
+        let robot = Robot::new(
+            Kinematics::DifferentialDrive {
+                wheelbase: cfg.wheelbase,
+                wheel_radius: cfg.wheel_radius,
+            },
+            true_start,
+        )
+        .with_slip(slip);
+        let wheel = EncoderWheel::new(cfg.encoder_lines, cfg.encoder_gear, cfg.wheel_radius);
+        let enc = [Encoder::new(wheel)?, Encoder::new(wheel)?];
+        let last = [enc[0].read(), enc[1].read()];
+        let pair = locus_models::IrPair::centred(cfg.ir_spacing);
+        let ir = IrPairSensor::new(pair, SharpIr::assumed(cfg.ir_sigma)?)?;
+        Ok(Self {
+            robot,
+            enc,
+            last,
+            counts: [0, 0],
+            ir,
+            world: World::square_arena(),
+            rng,
+            right_scale: 1.0 + cfg.right_scale_error,
+        })
+    }
+
+    /// One step under wheel speeds `(right, left)` (m/s): the new pose and
+    /// the IR reading (m).
+    fn step(&mut self, right: f64, left: f64, dt: f64) -> Result<(Pose, Option<[f32; 2]>), Error> {
+        let out = self
+            .robot
+            .step(&Command::Wheels { left, right }, dt)
+            .map_err(SimError::from)?;
+        self.enc[0]
+            .advance(out.measured_travel.right * self.right_scale, &mut self.rng)
+            .map_err(SimError::from)?;
+        self.enc[1]
+            .advance(out.measured_travel.left, &mut self.rng)
+            .map_err(SimError::from)?;
+        for i in 0..2 {
+            let now = self.enc[i].read();
+            // The firmware extends the 20-bit counter to the protocol's
+            // wrapping 32-bit count.
+            self.counts[i] =
+                self.counts[i].wrapping_add_signed(wrapping_diff(now, self.last[i], COUNTER_BITS));
+            self.last[i] = now;
+        }
+        let p = out.pose;
+        let reading = self
+            .ir
+            .read(&self.world.walls, [p.x, p.y, p.theta], &mut self.rng)
+            .map_err(SimError::from)?;
+        #[allow(clippy::cast_possible_truncation)] // the wire carries f32
+        let reading = reading.map(|(a, b)| [a as f32, b as f32]);
+        Ok((p, reading))
+    }
+}
+
+/// Runs the robot endpoint on `socket` until the host goes quiet.
+///
+/// # Errors
+/// [`Error::Timeout`] if no host command arrives within `handshake`;
+/// socket, configuration and simulator errors.
+#[allow(clippy::cast_precision_loss, clippy::cast_possible_truncation)]
+#[allow(clippy::cast_sign_loss, clippy::too_many_lines)]
+pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, Error> {
+    if !(cfg.time_scale.is_finite() && cfg.time_scale > 0.0) {
+        return Err(Error::Config("time_scale must be finite and > 0"));
+    }
+    let dt = cfg.square.dt;
+    let mut sim = Sim::new(&cfg.square, cfg.seed)?;
+    let mut receiver = Receiver::new();
+    let mut buf = [0u8; 2048];
+    let mut out = [0u8; MAX_PACKET];
+
+    // 1. Handshake: the first valid command names the host.
+    let deadline = Instant::now() + cfg.handshake;
+    let (mut host, mut command): (SocketAddr, LinkCommand) = loop {
+        let now = Instant::now();
+        if now >= deadline {
+            return Err(Error::Timeout("waiting for the host's first command"));
+        }
+        socket.set_read_timeout(Some(at_least_1us(deadline - now)))?;
+        match socket.recv_from(&mut buf) {
+            Ok((n, from)) => {
+                if let Ok((c, Status::Applied { .. })) = receiver.receive_command(&buf[..n]) {
+                    break (from, c);
+                }
+            }
+            Err(e) if is_timeout(&e) => {}
+            Err(e) => return Err(e.into()),
+        }
+    };
+
+    let mut report = RobotReport {
+        truth: vec![(0, sim.robot.pose)],
+        sent: 0,
+        commands: receiver.counters(),
+        watchdog_stops: 0,
+        on_time: 0,
+        ticks: 0,
+        sim_time: 0.0,
+    };
+    // 2. Telemetry 0.
+    let n = Telemetry::new(0, 0)
+        .encode(&mut out)
+        .map_err(Error::Encode)?;
+    socket.send_to(&out[..n], host)?;
+    report.sent += 1;
+
+    socket.set_nonblocking(true)?;
+    let start = Instant::now();
+    let mut last_command_time = 0.0;
+    let mut stopped = false;
+    let max_ticks = (cfg.square.max_time / dt).ceil() as u64;
+    for k in 1..=max_ticks {
+        // Receive commands until this tick's wall deadline.
+        let due = start + Duration::from_secs_f64(k as f64 * dt / cfg.time_scale);
+        let robot_time_prev = (k - 1) as f64 * dt;
+        loop {
+            match socket.recv_from(&mut buf) {
+                Ok((n, from)) => {
+                    if let Ok((c, Status::Applied { .. })) = receiver.receive_command(&buf[..n]) {
+                        command = c;
+                        host = from;
+                        last_command_time = robot_time_prev;
+                    }
+                    continue;
+                }
+                Err(e) if is_timeout(&e) => {}
+                Err(e) => return Err(e.into()),
+            }
+            let now = Instant::now();
+            if now >= due {
+                break;
+            }
+            // A socket read timeout rounds up to the kernel's tick (1-10
+            // ms): poll, sleeping in short steps (high-resolution timers).
+            std::thread::sleep((due - now).min(POLL));
+        }
+        let idle = robot_time_prev - last_command_time;
+        if idle >= cfg.idle_exit {
+            break;
+        }
+        let (right, left) = if idle >= cfg.watchdog {
+            if !stopped {
+                report.watchdog_stops += 1;
+                stopped = true;
+            }
+            (0.0, 0.0)
+        } else {
+            stopped = false;
+            (f64::from(command.right), f64::from(command.left))
+        };
+        if command.ack == (k - 1) as u32 {
+            report.on_time += 1;
+        }
+        let (pose, ir) = sim.step(right, left, dt)?;
+        let seq = k as u32;
+        let mut t = Telemetry::new(seq, (k as f64 * dt * 1e6).round() as u64);
+        t.counts = sim.counts;
+        t.ir = ir;
+        let n = t.encode(&mut out).map_err(Error::Encode)?;
+        socket.send_to(&out[..n], host)?;
+        report.sent += 1;
+        report.ticks = k;
+        report.sim_time = k as f64 * dt;
+        report.truth.push((seq, pose));
+    }
+    socket.set_nonblocking(false)?;
+    report.commands = receiver.counters();
+    Ok(report)
+}

@@ -1,0 +1,100 @@
+//! `locus host`: the localisation and control loop for a robot speaking
+//! the link protocol (`docs/protocol.md`).
+
+use std::net::{ToSocketAddrs, UdpSocket};
+
+use anyhow::Context;
+use clap::Args as ClapArgs;
+use comfy_table::Table;
+use locus_net::host::{HostConfig, run_host};
+
+use crate::link_scenario::square_config;
+
+/// Arguments of `locus host`.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    /// The robot's address.
+    #[arg(long, default_value = "127.0.0.1:7700")]
+    robot: String,
+    /// Local address to bind.
+    #[arg(long, default_value = "127.0.0.1:0")]
+    bind: String,
+    /// `square` or a scenario file whose `scenario = "square"` (the robot's
+    /// geometry, the filter's Q and R, the controller).
+    #[arg(default_value = "square", value_name = "SCENARIO|FILE")]
+    scenario: String,
+    /// Print every applied packet's estimate (robot time, x, y, theta).
+    #[arg(long)]
+    verbose: bool,
+}
+
+/// Runs `locus host`.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let square = square_config(&args.scenario)?;
+    let robot = args
+        .robot
+        .to_socket_addrs()
+        .with_context(|| format!("resolving {}", args.robot))?
+        .next()
+        .with_context(|| format!("no address for {}", args.robot))?;
+    let socket =
+        UdpSocket::bind(&args.bind).with_context(|| format!("binding UDP {}", args.bind))?;
+    let cfg = HostConfig {
+        square,
+        ..HostConfig::default()
+    };
+    let verbose = args.verbose;
+    let report = run_host(&socket, robot, &cfg, &mut |s| {
+        if verbose {
+            println!(
+                "{:.2} s  x {:.4} m  y {:.4} m  theta {:.4} rad{}",
+                s.robot_time,
+                s.estimate[0],
+                s.estimate[1],
+                s.estimate[2],
+                if s.skipped > 0 { "  (gap)" } else { "" }
+            );
+        }
+    })?;
+    let c = report.counters;
+    let mut lat: Vec<f64> = report.latency.clone();
+    lat.sort_by(f64::total_cmp);
+    let pct = |p: f64| {
+        lat.get(((lat.len().saturating_sub(1)) as f64 * p).round() as usize)
+            .map_or_else(|| "-".to_string(), |v| format!("{:.1}", v * 1e6))
+    };
+    println!("locus host: robot {robot}, {} laps", report.laps);
+    let mut table = Table::new();
+    table.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+    table.set_header(vec!["quantity", "value"]);
+    for (k, v) in [
+        (
+            "packets applied / lost / duplicate / late [count]",
+            format!("{} / {} / {} / {}", c.applied, c.lost, c.duplicate, c.late),
+        ),
+        (
+            "packets corrupt / malformed [count]",
+            format!("{} / {}", c.corrupt, c.malformed),
+        ),
+        ("commands sent [count]", report.commands_sent.to_string()),
+        (
+            "IR corrections applied [count]",
+            report.corrections.to_string(),
+        ),
+        (
+            "receive-to-command p50 / p99 [us]",
+            format!("{} / {}", pct(0.5), pct(0.99)),
+        ),
+        (
+            "robot clock offset [s] / drift [ppm]",
+            report.clock.map_or_else(
+                || "-".to_string(),
+                |f| format!("{:.6} / {:.1}", f.offset, f.drift * 1e6),
+            ),
+        ),
+    ] {
+        table.add_row(vec![k.to_string(), v]);
+    }
+    println!("{table}");
+    Ok(())
+}

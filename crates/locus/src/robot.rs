@@ -1,0 +1,76 @@
+//! `locus robot`: the `square` simulator as a robot endpoint on UDP
+//! (protocol: `docs/protocol.md`).
+
+use core::time::Duration;
+use std::net::UdpSocket;
+
+use anyhow::Context;
+use clap::Args as ClapArgs;
+use locus_net::robot::{RobotConfig, run_robot};
+
+use crate::link_scenario::square_config;
+
+/// Arguments of `locus robot`.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    /// Address to listen on for the host's commands (telemetry goes back
+    /// to the sender of the newest command).
+    #[arg(long, default_value = "127.0.0.1:7700")]
+    udp: String,
+    /// `square` or a scenario file whose `scenario = "square"`.
+    #[arg(default_value = "square", value_name = "SCENARIO|FILE")]
+    scenario: String,
+    /// Seed of the simulation's random numbers.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Robot seconds per wall second (> 0; > 1 runs faster than real time).
+    #[arg(long, default_value_t = 1.0)]
+    time_scale: f64,
+    /// Robot time without a command after which the wheels stop (s).
+    #[arg(long, default_value_t = 0.2)]
+    watchdog: f64,
+    /// Robot time without a command after which the run ends (s).
+    #[arg(long, default_value_t = 2.0)]
+    idle_exit: f64,
+    /// Wall time to wait for the host's first command (s).
+    #[arg(long, default_value_t = 60.0)]
+    handshake: f64,
+}
+
+/// Runs `locus robot`.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let square = square_config(&args.scenario)?;
+    let socket = UdpSocket::bind(&args.udp).with_context(|| format!("binding UDP {}", args.udp))?;
+    eprintln!(
+        "locus robot: {} listening on {} (time scale {}); waiting for a host",
+        args.scenario,
+        socket.local_addr()?,
+        args.time_scale
+    );
+    let cfg = RobotConfig {
+        square,
+        seed: args.seed,
+        time_scale: args.time_scale,
+        watchdog: args.watchdog,
+        idle_exit: args.idle_exit,
+        handshake: Duration::try_from_secs_f64(args.handshake)
+            .context("--handshake must be a non-negative number of seconds")?,
+    };
+    let r = run_robot(&socket, &cfg)?;
+    let c = r.commands;
+    println!(
+        "locus robot: {} ticks ({:.2} s robot time), {} telemetry packets sent; commands applied {} / lost {} / duplicate {} / late {} / corrupt {} / malformed {}; on time {:.1} %; watchdog stops {}",
+        r.ticks,
+        r.sim_time,
+        r.sent,
+        c.applied,
+        c.lost,
+        c.duplicate,
+        c.late,
+        c.corrupt,
+        c.malformed,
+        100.0 * r.on_time as f64 / r.ticks.max(1) as f64,
+        r.watchdog_stops
+    );
+    Ok(())
+}
