@@ -9,6 +9,7 @@ mod guide;
 mod hw;
 mod output;
 mod plot;
+mod replay;
 mod reproduce;
 mod run;
 
@@ -54,6 +55,12 @@ enum Command {
     /// Cycle-level model of papers 000/003's FPGA correction core: cycles,
     /// time and operators per correction, over 1..9 datapaths.
     Hw(hw::Args),
+    /// Replay a recorded log through the EKF: `replay mrclam DIR --robot N`
+    /// (UTIAS MRCLAM) or `replay csv FILE` (Locus's CSV log format,
+    /// docs/log-format.md; `.xz` read directly). Late sightings are applied
+    /// at their own time. Prints the summary against ground truth beside
+    /// odometry alone, writes `log.csv`, `metrics.json` and pictures.
+    Replay(replay::Args),
 }
 
 fn main() -> ExitCode {
@@ -65,6 +72,7 @@ fn main() -> ExitCode {
         Command::Reproduce(args) => reproduce::run(&args),
         Command::Doa(args) => doa::run(&args),
         Command::Hw(args) => hw::run(&args),
+        Command::Replay(args) => replay::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
