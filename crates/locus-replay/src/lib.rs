@@ -44,13 +44,17 @@ extern crate alloc;
 use alloc::collections::VecDeque;
 
 use locus_core::nalgebra::{Matrix3, Vector2, Vector3};
-use locus_core::{Belief, ChiSquareGate, Ekf, MotionModel, wrap_angle};
+use locus_core::{Belief, ChiSquareGate, Ekf, MeasurementModel, MotionModel, wrap_angle};
 use locus_logs::mrclam::{Odometry, Pose};
 use locus_models::range_bearing::RangeBearing;
 use locus_models::unicycle::{Unicycle, Velocities};
 use locus_sim::scenario::{Sample, Summary, Tally};
 
 pub use log::{Landmark, Log, Sighting};
+
+/// Cap on one sighting's NIS in [`Report::innovation_nll`]: the 99.9 %
+/// point of chi-square with 2 degrees of freedom, `-2 ln 0.001`.
+pub const NIS_CAP: f64 = 13.815_510_557_964_274;
 
 /// Errors of the replay.
 #[derive(Debug, thiserror::Error)]
@@ -421,6 +425,12 @@ pub struct Report {
     /// Sightings older than the history (or than the first odometry),
     /// not applied.
     pub too_late: usize,
+    /// Negative log-likelihood of the innovations (natural log, without
+    /// the constant `ln 2 pi` per sighting): the sum over the sightings
+    /// that reached the filter of `(ln det S + min(NIS, NIS_CAP)) / 2`, `S`
+    /// and the NIS against the belief before the sighting. The objective
+    /// `locus tune` minimises; the cap keeps gross outliers from dominating.
+    pub innovation_nll: f64,
     /// The final belief.
     pub final_belief: Belief<f64, 3>,
 }
@@ -495,6 +505,8 @@ struct Entry {
     after: State,
     outcome: Option<SightingOutcome>,
     inflations: u32,
+    /// This event's term of [`Report::innovation_nll`].
+    nll: f64,
 }
 
 /// The replay engine: a base state (final) and the history after it.
@@ -532,6 +544,7 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             s.time = t;
         }
         let mut inflations = 0;
+        let mut nll = 0.0;
         let outcome = match event {
             Event::Odometry(o) => {
                 s.v = o.v * self.cfg.v_scale;
@@ -549,8 +562,19 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
                     );
                     let zv = Vector2::new(z.range, z.bearing);
                     let mut recovered = false;
+                    if model.h(&s.belief.x).is_some() {
+                        let h = model.jacobian(&s.belief.x);
+                        let cov = h * s.belief.p * h.transpose() + model.noise(&s.belief.x);
+                        nll = 0.5 * cov.determinant().ln();
+                    }
+                    let mut first = true;
                     loop {
-                        match self.ekf.correct(&s.belief, &model, &zv) {
+                        let attempt = self.ekf.correct(&s.belief, &model, &zv);
+                        if first && let Ok(c) = &attempt {
+                            nll += 0.5 * c.nis.min(NIS_CAP);
+                        }
+                        first = false;
+                        match attempt {
                             Ok(c) if c.applied => {
                                 s.belief = c.belief;
                                 s.rejections = 0;
@@ -586,6 +610,7 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             after: s,
             outcome,
             inflations,
+            nll,
         })
     }
 
@@ -653,6 +678,7 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             }
         };
         self.report.inflations += e.inflations as usize;
+        self.report.innovation_nll += e.nll;
         let time = e.event.time();
         let step = Step {
             index: self.next_index,
@@ -755,6 +781,7 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
             unknown_sightings: log.unknown_sightings,
             late: 0,
             too_late: 0,
+            innovation_nll: 0.0,
             final_belief: belief,
         },
         sink,

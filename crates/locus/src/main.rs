@@ -12,6 +12,7 @@ mod plot;
 mod replay;
 mod reproduce;
 mod run;
+mod tune;
 
 use std::process::ExitCode;
 
@@ -61,6 +62,10 @@ enum Command {
     /// at their own time. Prints the summary against ground truth beside
     /// odometry alone, writes `log.csv`, `metrics.json` and pictures.
     Replay(replay::Args),
+    /// Tune the replay's Q, R and odometry scale factors on MRCLAM robots
+    /// by maximising the innovation likelihood (argmin's Nelder-Mead);
+    /// prints the values and every robot's errors before and after.
+    Tune(tune::Args),
 }
 
 fn main() -> ExitCode {
@@ -73,6 +78,7 @@ fn main() -> ExitCode {
         Command::Doa(args) => doa::run(&args),
         Command::Hw(args) => hw::run(&args),
         Command::Replay(args) => replay::run(&args),
+        Command::Tune(args) => tune::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
