@@ -3,7 +3,8 @@
 //! outputs as `locus run`: the summary tables (plus the replay's own
 //! counts), `log.csv` (one row per event), `metrics.json` and the pictures
 //! (map with the landmarks as crosses, true/estimated/odometry paths and
-//! covariance ellipses; errors with +-3 sigma; variances).
+//! covariance ellipses; errors with +-3 sigma; variances; the NIS with the
+//! consistency monitor's window mean and interval).
 
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};
@@ -223,7 +224,12 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path) -> Result<()> {
         Vec::new()
     } else {
         let title = format!("locus replay {}", log.name);
-        crate::plot::write_all(out, &samples, &info.walls, &title, common.ellipse_sigma)?
+        let mut written =
+            crate::plot::write_all(out, &samples, &info.walls, &title, common.ellipse_sigma)?;
+        if samples.iter().any(|s| s.correction.is_some()) {
+            written.extend(crate::plot::write_nis(out, &samples, &title)?);
+        }
+        written
     };
 
     let mut text = format!(
