@@ -114,3 +114,26 @@ fn bad_configurations_and_logs_are_errors() {
         Err(Error::ArrivesBeforeTaken { index: 0, .. })
     ));
 }
+
+/// The innovation likelihood that `locus tune` maximises prefers a range
+/// and bearing noise near the log's (about 0.007 m and rad RMS here) to
+/// one 25x too large or 10x too small.
+#[test]
+fn the_innovation_likelihood_prefers_the_right_noise() {
+    let log = Log::from_locus(
+        "s",
+        locus_csv::parse(&text(false), Path::new("s.csv")).unwrap(),
+    );
+    let nll = |sigma: f64| {
+        let cfg = Config {
+            sigma_range: sigma,
+            sigma_bearing: sigma,
+            gate: None,
+            ..Config::default()
+        };
+        replay(&log, &cfg, |_| {}).unwrap().innovation_nll
+    };
+    let (right, large, small) = (nll(0.01), nll(0.25), nll(0.001));
+    println!("innovation NLL: sigma 0.01 {right:.1}, 0.25 {large:.1}, 0.001 {small:.1}");
+    assert!(right < large && right < small);
+}
