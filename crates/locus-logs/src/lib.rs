@@ -2,6 +2,7 @@
 #![forbid(unsafe_code)]
 
 pub mod error;
+pub mod locus_csv;
 pub mod mrclam;
 mod text;
 

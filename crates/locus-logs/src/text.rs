@@ -2,7 +2,7 @@
 //! comment and blank lines skipped, fields parsed with errors that name file,
 //! line, column and field.
 
-use core::str::SplitWhitespace;
+use core::str::{Split, SplitWhitespace};
 use std::fs;
 use std::path::{Path, PathBuf};
 
@@ -66,10 +66,50 @@ pub(crate) fn records<'a>(text: &'a str, path: &'a Path) -> impl Iterator<Item =
                 path,
                 line: i + 1,
                 column: 0,
-                it: trimmed.split_whitespace(),
+                it: Tokens::Whitespace(trimmed.split_whitespace()),
             })
         }
     })
+}
+
+/// The data lines of a comma-separated text: `(line number, fields)`,
+/// skipping blank lines and lines whose first non-blank character is `#`.
+/// Fields are trimmed of surrounding blanks; an empty field counts as a
+/// field (and fails to parse as a number).
+pub(crate) fn csv_records<'a>(
+    text: &'a str,
+    path: &'a Path,
+) -> impl Iterator<Item = Fields<'a>> + 'a {
+    text.lines().enumerate().filter_map(move |(i, line)| {
+        let trimmed = line.trim();
+        if trimmed.is_empty() || trimmed.starts_with('#') {
+            None
+        } else {
+            Some(Fields {
+                path,
+                line: i + 1,
+                column: 0,
+                it: Tokens::Comma(trimmed.split(',')),
+            })
+        }
+    })
+}
+
+/// The tokens of one line: whitespace- or comma-separated.
+enum Tokens<'a> {
+    Whitespace(SplitWhitespace<'a>),
+    Comma(Split<'a, char>),
+}
+
+impl<'a> Iterator for Tokens<'a> {
+    type Item = &'a str;
+
+    fn next(&mut self) -> Option<&'a str> {
+        match self {
+            Tokens::Whitespace(it) => it.next(),
+            Tokens::Comma(it) => it.next().map(str::trim),
+        }
+    }
 }
 
 /// The fields of one data line, read left to right.
@@ -78,11 +118,12 @@ pub(crate) struct Fields<'a> {
     /// Line number, 1-based.
     pub(crate) line: usize,
     column: usize,
-    it: SplitWhitespace<'a>,
+    it: Tokens<'a>,
 }
 
 impl<'a> Fields<'a> {
-    fn next_text(&mut self, field: &'static str) -> Result<&'a str> {
+    /// The next field as text.
+    pub(crate) fn next_text(&mut self, field: &'static str) -> Result<&'a str> {
         self.column += 1;
         self.it
             .next()

@@ -11,9 +11,11 @@ mod hw;
 mod link_scenario;
 mod output;
 mod plot;
+mod replay;
 mod reproduce;
 mod robot;
 mod run;
+mod tune;
 
 use std::process::ExitCode;
 
@@ -66,6 +68,16 @@ enum Command {
     /// protocol: EKF, path controller, wheel commands; reports lost,
     /// duplicate, late, corrupt and malformed packets and the robot's clock.
     Host(host::Args),
+    /// Replay a recorded log through the EKF: `replay mrclam DIR --robot N`
+    /// (UTIAS MRCLAM) or `replay csv FILE` (Locus's CSV log format,
+    /// docs/log-format.md; `.xz` read directly). Late sightings are applied
+    /// at their own time. Prints the summary against ground truth beside
+    /// odometry alone, writes `log.csv`, `metrics.json` and pictures.
+    Replay(replay::Args),
+    /// Tune the replay's Q, R and odometry scale factors on MRCLAM robots
+    /// by maximising the innovation likelihood (argmin's Nelder-Mead);
+    /// prints the values and every robot's errors before and after.
+    Tune(tune::Args),
 }
 
 fn main() -> ExitCode {
@@ -79,6 +91,8 @@ fn main() -> ExitCode {
         Command::Hw(args) => hw::run(&args),
         Command::Robot(args) => robot::run(&args),
         Command::Host(args) => host::run(&args),
+        Command::Replay(args) => replay::run(&args),
+        Command::Tune(args) => tune::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

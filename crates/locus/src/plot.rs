@@ -482,6 +482,124 @@ pub fn write_all(
     Ok(written)
 }
 
+/// One correction on the NIS picture: time (s), NIS, window mean, lower
+/// and upper bound of the mean's interval.
+type NisRow = (f64, f64, f64, f64, f64);
+
+/// A line of the NIS picture: label (empty: none), colour, value of a row.
+type NisLine = (&'static str, RGBColor, fn(&NisRow) -> f64);
+
+/// Corrections in the NIS monitor's window on the `nis` picture.
+pub const NIS_WINDOW: usize = 50;
+
+/// Writes `nis.png` and `nis.svg` into `dir`: the NIS of every correction
+/// against time (capped at the top of the plot), the mean NIS over the last
+/// [`NIS_WINDOW`] corrections from [`locus_core::ConsistencyMonitor`] and its
+/// two-sided 95 % acceptance interval; returns the paths written.
+///
+/// # Errors
+/// No corrections, or a picture that cannot be drawn or written.
+pub fn write_nis(dir: &Path, samples: &[Sample], title: &str) -> Result<Vec<PathBuf>> {
+    use locus_core::ConsistencyMonitor;
+    let mut monitor = ConsistencyMonitor::<NIS_WINDOW>::new(0.95).map_err(err)?;
+    // (time, NIS, window mean, lower, upper) per correction.
+    let mut rows: Vec<NisRow> = Vec::new();
+    for s in samples {
+        if let Some((nis, dof, _)) = s.correction {
+            monitor.push(nis, dof);
+            let c = monitor.assess();
+            rows.push((s.time, nis, c.mean_nis, c.lower, c.upper));
+        }
+    }
+    if rows.is_empty() {
+        return Err(anyhow!("no corrections to plot"));
+    }
+    register_font()?;
+    let mut written = Vec::new();
+    for ext in ["png", "svg"] {
+        let path = dir.join(format!("nis.{ext}"));
+        let t = format!("{title}: NIS and its {NIS_WINDOW}-correction mean");
+        if ext == "png" {
+            draw_nis(
+                &BitMapBackend::new(&path, SIZE).into_drawing_area(),
+                &rows,
+                &t,
+            )
+        } else {
+            draw_nis(&SVGBackend::new(&path, SIZE).into_drawing_area(), &rows, &t)
+        }
+        .with_context(|| format!("writing {}", path.display()))?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+fn draw_nis<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    rows: &[NisRow],
+    title: &str,
+) -> Result<()> {
+    const TOP: f64 = 20.0;
+    root.fill(&WHITE).map_err(err)?;
+    let t1 = rows.last().map_or(1.0, |r| r.0).max(1e-3);
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (FAMILY, 20))
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..t1, 0.0..TOP)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("time [s]")
+        .y_desc("NIS [-]")
+        .label_style((FAMILY, 13))
+        .draw()
+        .map_err(err)?;
+    let step = rows.len().div_ceil(MAX_POINTS * 2).max(1);
+    let dots = RGBColor(120, 120, 120);
+    chart
+        .draw_series(
+            rows.iter()
+                .step_by(step)
+                .map(|r| Circle::new((r.0, r.1.min(TOP)), 1, dots.filled())),
+        )
+        .map_err(err)?
+        .label(format!("NIS of a correction (capped at {TOP})"))
+        .legend(move |(x, y)| Circle::new((x + 10, y), 3, dots.filled()));
+    let series: [NisLine; 3] = [
+        ("window mean NIS", RGBColor(0, 80, 220), |r| r.2),
+        ("95 % interval of the mean", RGBColor(200, 40, 40), |r| r.3),
+        ("", RGBColor(200, 40, 40), |r| r.4),
+    ];
+    for (label, color, f) in series {
+        let s = chart
+            .draw_series(LineSeries::new(
+                rows.iter()
+                    .step_by(step)
+                    .filter(|r| f(r).is_finite())
+                    .map(|r| (r.0, f(r).min(TOP))),
+                color.stroke_width(2),
+            ))
+            .map_err(err)?;
+        if !label.is_empty() {
+            s.label(label).legend(move |(x, y)| {
+                PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2))
+            });
+        }
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font((FAMILY, 13))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -348,6 +348,14 @@ fn summary_text(args: &RunArgs, info: &Info, s: &Summary) -> String {
         "locus run {}: {}, seed {}, {} steps of {} s ({:.1} s simulated{laps})\n",
         info.name, info.title, args.seed, s.steps, info.dt, s.sim_time
     );
+    text.push_str(&summary_tables(info, s));
+    text
+}
+
+/// The two tables of a single run's summary (estimators; filter checks),
+/// shared with `locus replay`.
+pub(crate) fn summary_tables(info: &Info, s: &Summary) -> String {
+    let mut text = String::new();
     let mut table = Table::new();
     table.load_preset(UTF8_FULL).set_header(vec![
         "estimator",
@@ -408,7 +416,7 @@ fn summary_text(args: &RunArgs, info: &Info, s: &Summary) -> String {
 }
 
 /// A JSON number, or `null` when not finite.
-fn num(v: f64) -> String {
+pub(crate) fn num(v: f64) -> String {
     if v.is_finite() {
         format!("{v}")
     } else {
@@ -417,7 +425,7 @@ fn num(v: f64) -> String {
 }
 
 /// A JSON string literal (quotes and backslashes escaped).
-fn json_str(v: &str) -> String {
+pub(crate) fn json_str(v: &str) -> String {
     format!("\"{}\"", v.replace('\\', "\\\\").replace('"', "\\\""))
 }
 
@@ -432,8 +440,21 @@ fn settings(info: &Info) -> Vec<(&'static str, String)> {
 
 /// `metrics.json`: the scenario, seed, main settings and the summary (SI).
 fn metrics_json(info: &Info, seed: u64, s: &Summary) -> String {
+    metrics_json_with(info, Some(seed), s, Vec::new())
+}
+
+/// `metrics.json` with an optional seed and `extra` fields (already JSON
+/// values) after the summary's; shared with `locus replay`.
+pub(crate) fn metrics_json_with(
+    info: &Info,
+    seed: Option<u64>,
+    s: &Summary,
+    extra: Vec<(&'static str, String)>,
+) -> String {
     let mut fields = settings(info);
-    fields.insert(1, ("seed", seed.to_string()));
+    if let Some(seed) = seed {
+        fields.insert(1, ("seed", seed.to_string()));
+    }
     fields.extend([
         ("steps", s.steps.to_string()),
         ("sim_time_s", num(s.sim_time)),
@@ -457,6 +478,7 @@ fn metrics_json(info: &Info, seed: u64, s: &Summary) -> String {
         ("nees_dof", s.nees_dof.to_string()),
         ("real_time_factor", num(s.real_time_factor)),
     ]);
+    fields.extend(extra);
     let body: Vec<String> = fields
         .iter()
         .map(|(k, v)| format!("  \"{k}\": {v}"))

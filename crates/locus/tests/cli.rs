@@ -591,3 +591,59 @@ fn robot_and_host_run_the_square_over_udp() {
     );
     assert!(robot_out.contains("watchdog stops"), "{robot_out}");
 }
+
+/// `locus replay`: MRCLAM robot 4 exported to a Locus CSV log and replayed
+/// from it gives the same table; a missing file and a malformed line are
+/// named.
+#[test]
+fn replay_mrclam_and_its_csv_export_agree_and_errors_name_the_file() {
+    let data = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/mrclam/MRCLAM_Dataset6"
+    );
+    let dir = std::env::temp_dir().join(format!("locus-cli-replay-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("robot4.csv");
+    let (csv_s, out_a, out_b) = (
+        csv.to_str().unwrap(),
+        dir.join("a").to_str().unwrap().to_owned(),
+        dir.join("b").to_str().unwrap().to_owned(),
+    );
+    let a = locus(&[
+        "replay",
+        "mrclam",
+        data,
+        "--robot",
+        "4",
+        "--export",
+        csv_s,
+        "--out",
+        &out_a,
+        "--no-plots",
+    ]);
+    assert!(a.status.success(), "{}", String::from_utf8_lossy(&a.stderr));
+    let a = String::from_utf8(a.stdout).unwrap();
+    let ekf = rmse_x(&a, "EKF (odometry + landmarks)");
+    let odo = rmse_x(&a, "odometry alone");
+    assert!(ekf < odo, "{a}");
+    let b = locus(&["replay", "csv", csv_s, "--out", &out_b, "--no-plots"]);
+    assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr));
+    let b = String::from_utf8(b.stdout).unwrap();
+    assert_eq!(ekf, rmse_x(&b, "EKF (odometry + landmarks)"));
+    assert!(std::path::Path::new(&out_b).join("metrics.json").is_file());
+
+    let missing = dir.join("none.csv");
+    let e = locus(&["replay", "csv", missing.to_str().unwrap()]);
+    assert!(!e.status.success());
+    let stderr = String::from_utf8(e.stderr).unwrap();
+    assert!(stderr.contains("none.csv: not found"), "{stderr}");
+    let bad = dir.join("bad.csv");
+    std::fs::write(&bad, "landmark,6,1,2\nodometry,0,0.1\n").unwrap();
+    let e = locus(&["replay", "csv", bad.to_str().unwrap()]);
+    let stderr = String::from_utf8(e.stderr).unwrap();
+    assert!(
+        stderr.contains("bad.csv:2: field \"omega\" (column 4): missing"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

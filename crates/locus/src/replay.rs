@@ -1,0 +1,330 @@
+//! `locus replay mrclam DIR [--robot N]` and `locus replay csv FILE`: a
+//! recorded log replayed through the EKF (`locus_replay`), with the same
+//! outputs as `locus run`: the summary tables (plus the replay's own
+//! counts), `log.csv` (one row per event), `metrics.json` and the pictures
+//! (map with the landmarks as crosses, true/estimated/odometry paths and
+//! covariance ellipses; errors with +-3 sigma; variances; the NIS with the
+//! consistency monitor's window mean and interval).
+
+use std::fs::{self, File};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use clap::{Args as ClapArgs, Subcommand};
+use comfy_table::{Table, presets::UTF8_FULL};
+use indicatif::{ProgressBar, ProgressStyle};
+use locus_logs::mrclam::Dataset;
+use locus_models::laser_wall::Segment;
+use locus_replay::{Config, Log, Report, replay};
+use locus_sim::scenario::Sample;
+
+use crate::output::print_out;
+use crate::run::{Info, json_str, metrics_json_with, num, summary_tables};
+
+/// Arguments of `locus replay`.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    #[command(subcommand)]
+    source: Source,
+}
+
+#[derive(Subcommand, Debug)]
+enum Source {
+    /// A robot of a UTIAS MRCLAM dataset directory (e.g.
+    /// `../shared/data/mrclam/MRCLAM_Dataset6`; files plain or `.xz`).
+    /// Robot-to-robot sightings and unknown barcodes are counted and left
+    /// out.
+    Mrclam {
+        /// The dataset directory.
+        dir: PathBuf,
+        /// The robot (1-5).
+        #[arg(long, default_value_t = 1)]
+        robot: u32,
+        /// Also write the robot's log in Locus's CSV format to this file
+        /// (docs/log-format.md).
+        #[arg(long)]
+        export: Option<PathBuf>,
+        #[command(flatten)]
+        common: Common,
+    },
+    /// A log in Locus's CSV format (docs/log-format.md; `.xz` read
+    /// directly).
+    Csv {
+        /// The log file.
+        file: PathBuf,
+        #[command(flatten)]
+        common: Common,
+    },
+}
+
+/// Options shared by both sources.
+#[derive(ClapArgs, Debug)]
+struct Common {
+    /// Output directory (created if missing). Default:
+    /// `out/replay-<log name>`.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Chi-square gate confidence in (0, 1).
+    #[arg(long, default_value_t = 0.999)]
+    gate: f64,
+    /// No gate: apply every sighting.
+    #[arg(long)]
+    no_gate: bool,
+    /// Power spectral density of the forward-speed noise, m^2/s.
+    #[arg(long, default_value_t = Config::default().q_v)]
+    q_v: f64,
+    /// Power spectral density of the turn-rate noise, rad^2/s.
+    #[arg(long, default_value_t = Config::default().q_omega)]
+    q_omega: f64,
+    /// Range noise standard deviation, m.
+    #[arg(long, default_value_t = Config::default().sigma_range)]
+    sigma_range: f64,
+    /// Bearing noise standard deviation, rad.
+    #[arg(long, default_value_t = Config::default().sigma_bearing)]
+    sigma_bearing: f64,
+    /// Scale factor on the logged forward speed.
+    #[arg(long, default_value_t = 1.0)]
+    v_scale: f64,
+    /// Scale factor on the logged turn rate.
+    #[arg(long, default_value_t = 1.0)]
+    omega_scale: f64,
+    /// Do not draw the pictures.
+    #[arg(long)]
+    no_plots: bool,
+    /// Level of the covariance ellipses on the map, in standard deviations.
+    #[arg(long, default_value_t = crate::plot::ELLIPSE_SIGMA)]
+    ellipse_sigma: f64,
+}
+
+impl Common {
+    fn config(&self) -> Config {
+        Config {
+            q_v: self.q_v,
+            q_omega: self.q_omega,
+            sigma_range: self.sigma_range,
+            sigma_bearing: self.sigma_bearing,
+            v_scale: self.v_scale,
+            omega_scale: self.omega_scale,
+            gate: (!self.no_gate).then_some(self.gate),
+            ..Config::default()
+        }
+    }
+}
+
+/// Runs `locus replay`.
+///
+/// # Errors
+/// A log that cannot be read (file and line named), an invalid setting, a
+/// file that cannot be written.
+pub fn run(args: &Args) -> Result<()> {
+    let (log, common) = match &args.source {
+        Source::Mrclam {
+            dir,
+            robot,
+            export,
+            common,
+        } => {
+            let dataset = Dataset::open(dir)?;
+            let log = Log::mrclam(&dataset, *robot)?;
+            if let Some(path) = export {
+                fs::write(path, locus_logs::locus_csv::write(&log.to_locus()))
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
+            (log, common)
+        }
+        Source::Csv { file, common } => (Log::locus_csv(file)?, common),
+    };
+    let cfg = common.config();
+    let slug: String = log
+        .name
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+        .collect();
+    let out = common
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("out/replay-{slug}")));
+    execute(&log, &cfg, common, &out)
+}
+
+/// The landmarks as crosses of 0.3 m for the map.
+fn crosses(log: &Log) -> Vec<Segment<f64>> {
+    const HALF: f64 = 0.15;
+    log.landmarks
+        .iter()
+        .flat_map(|l| {
+            [
+                Segment::new([l.x - HALF, l.y], [l.x + HALF, l.y]),
+                Segment::new([l.x, l.y - HALF], [l.x, l.y + HALF]),
+            ]
+        })
+        .collect()
+}
+
+fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path) -> Result<()> {
+    fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let csv_path = out.join("log.csv");
+    let file =
+        File::create(&csv_path).with_context(|| format!("creating {}", csv_path.display()))?;
+    let mut csv = BufWriter::new(file);
+    writeln!(csv, "{}", locus_replay::Step::csv_header())
+        .with_context(|| format!("writing {}", csv_path.display()))?;
+
+    let total = (log.odometry.len() + log.sightings.len()) as u64;
+    let bar = ProgressBar::new(total);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} events, {elapsed} elapsed")
+            .context("progress bar template")?,
+    );
+    let mut samples: Vec<Sample> = Vec::new();
+    let mut io_error: Option<std::io::Error> = None;
+    let report = replay(log, cfg, |step| {
+        if step.index % 4096 == 0 {
+            bar.set_position(step.index as u64);
+        }
+        if !common.no_plots
+            && let Some(s) = step.sample()
+        {
+            samples.push(s);
+        }
+        if io_error.is_none()
+            && let Err(e) = writeln!(csv, "{}", step.csv_row())
+        {
+            io_error = Some(e);
+        }
+    })
+    .with_context(|| format!("replaying {}", log.name))?;
+    bar.finish_and_clear();
+    if let Some(e) = io_error {
+        return Err(e).with_context(|| format!("writing {}", csv_path.display()));
+    }
+    csv.flush()
+        .with_context(|| format!("writing {}", csv_path.display()))?;
+
+    #[allow(clippy::cast_precision_loss)]
+    let dt = log.duration() / log.odometry.len().max(1) as f64;
+    let info = Info {
+        name: log.name.clone(),
+        title: "recorded log replayed through the EKF (unicycle + range-bearing)",
+        estimator: "EKF (odometry + landmarks)",
+        measurement: "landmark",
+        dt,
+        laps: None,
+        walls: crosses(log),
+    };
+    let metrics_path = out.join("metrics.json");
+    fs::write(
+        &metrics_path,
+        metrics_json_with(&info, None, &report.summary, extra_metrics(cfg, &report)),
+    )
+    .with_context(|| format!("writing {}", metrics_path.display()))?;
+
+    let pictures = if common.no_plots || samples.is_empty() {
+        Vec::new()
+    } else {
+        let title = format!("locus replay {}", log.name);
+        let mut written =
+            crate::plot::write_all(out, &samples, &info.walls, &title, common.ellipse_sigma)?;
+        if samples.iter().any(|s| s.correction.is_some()) {
+            written.extend(crate::plot::write_nis(out, &samples, &title)?);
+        }
+        written
+    };
+
+    let mut text = format!(
+        "locus replay {}: {} events over {:.1} s ({} compared with ground truth)\n",
+        log.name,
+        report.steps,
+        log.duration(),
+        report.compared
+    );
+    text.push_str(&summary_tables(&info, &report.summary));
+    text.push_str(&format!("{}\n", counts_table(cfg, &report)));
+    text.push_str(&format!("log: {}\n", csv_path.display()));
+    text.push_str(&format!("metrics: {}\n", metrics_path.display()));
+    if !pictures.is_empty() {
+        let names: Vec<String> = pictures
+            .iter()
+            .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+            .collect();
+        text.push_str(&format!(
+            "pictures: {} in {}\n",
+            names.join(", "),
+            out.display()
+        ));
+    }
+    print_out(&text)
+}
+
+/// The replay's own counts: what happened to the sightings.
+fn counts_table(cfg: &Config, r: &Report) -> Table {
+    let mut t = Table::new();
+    t.load_preset(UTF8_FULL)
+        .set_header(vec!["replay [unit]", "value"]);
+    let gate = cfg
+        .gate
+        .map_or_else(|| "none".to_string(), |g| format!("{:.1} %", 100.0 * g));
+    let rows = [
+        ("gate confidence", gate),
+        (
+            "odometry records / landmark sightings [count]",
+            format!("{} / {}", r.odometry, r.sightings),
+        ),
+        (
+            "sightings applied / gated [count]",
+            format!("{} / {}", r.applied, r.gated),
+        ),
+        (
+            "share of sightings gated [%]",
+            format!("{:.2}", 100.0 * r.gated_share()),
+        ),
+        (
+            "covariance inflations / sightings applied after one [count]",
+            format!("{} / {}", r.inflations, r.recovered),
+        ),
+        (
+            "robot-to-robot / unknown / not in map [count, skipped]",
+            format!(
+                "{} / {} / {}",
+                r.robot_sightings, r.unknown_sightings, r.not_in_map
+            ),
+        ),
+        (
+            "late sightings re-run / too late [count]",
+            format!("{} / {}", r.late, r.too_late),
+        ),
+    ];
+    for (k, v) in rows {
+        t.add_row(vec![k.to_string(), v]);
+    }
+    t
+}
+
+fn extra_metrics(cfg: &Config, r: &Report) -> Vec<(&'static str, String)> {
+    vec![
+        ("source", json_str("replay")),
+        (
+            "gate_confidence",
+            cfg.gate.map_or_else(|| "null".into(), num),
+        ),
+        ("q_v_m2_per_s", num(cfg.q_v)),
+        ("q_omega_rad2_per_s", num(cfg.q_omega)),
+        ("sigma_range_m", num(cfg.sigma_range)),
+        ("sigma_bearing_rad", num(cfg.sigma_bearing)),
+        ("v_scale", num(cfg.v_scale)),
+        ("omega_scale", num(cfg.omega_scale)),
+        ("events", r.steps.to_string()),
+        ("compared", r.compared.to_string()),
+        ("sightings", r.sightings.to_string()),
+        ("applied", r.applied.to_string()),
+        ("gated", r.gated.to_string()),
+        ("gated_share", num(r.gated_share())),
+        ("inflations", r.inflations.to_string()),
+        ("robot_sightings", r.robot_sightings.to_string()),
+        ("unknown_sightings", r.unknown_sightings.to_string()),
+        ("not_in_map", r.not_in_map.to_string()),
+        ("late", r.late.to_string()),
+        ("too_late", r.too_late.to_string()),
+    ]
+}
