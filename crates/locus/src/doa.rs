@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow};
 use clap::Subcommand;
-use comfy_table::Table;
+use comfy_table::{Table, presets::UTF8_FULL};
 use indicatif::{ProgressBar, ProgressStyle};
 use locus_analysis::doa::{DoaConfig, DoaResult, Shard, Study, merge};
 use plotters::prelude::*;
@@ -193,6 +193,7 @@ fn report(result: &DoaResult, out: &Path, no_plots: bool) -> Result<()> {
         c
     };
     let mut table = Table::new();
+    table.load_preset(UTF8_FULL);
     let mut header = vec!["v_g".to_owned()];
     header.extend(cols.iter().map(|&j| format!("M_zeta a={}", alpha[j])));
     header.push("max M_zeta (alpha)".into());

@@ -7,7 +7,7 @@
 
 use anyhow::{Result, anyhow};
 use clap::ValueEnum;
-use comfy_table::Table;
+use comfy_table::{Table, presets::UTF8_FULL};
 use locus_analysis::hw::{self, CoreInputs, CoreRun, HwConfig, Latencies, Schedule};
 use locus_core::nalgebra::{Matrix3, Vector3};
 use locus_core::{Belief, CovarianceUpdate, Ekf, MeasurementModel};
@@ -123,6 +123,7 @@ pub fn run(args: &Args) -> Result<()> {
         latencies.transition
     );
     let mut table = Table::new();
+    table.load_preset(UTF8_FULL);
     table.set_header(vec![
         "schedule",
         "cycles",
@@ -182,6 +183,7 @@ pub fn run(args: &Args) -> Result<()> {
 
     let r = hw::run(&cfg, Schedule::Inverse2x2, &inputs)?;
     let mut states = Table::new();
+    states.load_preset(UTF8_FULL);
     states.set_header(vec!["state (11-step schedule)", "cycles", "share [%]"]);
     for (s, c) in r.cycles_per_state() {
         states.add_row(vec![
@@ -193,6 +195,7 @@ pub fn run(args: &Args) -> Result<()> {
     println!("{states}");
 
     let mut steps = Table::new();
+    steps.load_preset(UTF8_FULL);
     steps.set_header(vec!["step", "cycles"]);
     let mut order: Vec<&'static str> = Vec::new();
     for p in &r.trace {
@@ -212,6 +215,7 @@ pub fn run(args: &Args) -> Result<()> {
     println!("{steps}");
 
     let mut sweep = Table::new();
+    sweep.load_preset(UTF8_FULL);
     sweep.set_header(vec![
         "datapaths",
         "11-step cycles",

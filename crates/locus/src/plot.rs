@@ -96,7 +96,7 @@ fn err<E: core::fmt::Debug>(e: E) -> anyhow::Error {
 fn draw_map<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     samples: &[Sample],
-    walls: &[Segment<f64>],
+    (walls, walls_label): (&[Segment<f64>], &str),
     title: &str,
     sigma: f64,
 ) -> Result<()> {
@@ -153,7 +153,7 @@ fn draw_map<DB: DrawingBackend>(
         let drawn = chart.draw_series(series).map_err(err)?;
         if i == 0 {
             drawn
-                .label("walls")
+                .label(walls_label)
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], wall_style));
         }
     }
@@ -402,7 +402,8 @@ fn draw_covariance<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Writes `map` (ellipses at `ellipse_sigma` standard deviations),
+/// Writes `map` (the map's segments labelled `walls_label` in the legend,
+/// ellipses at `ellipse_sigma` standard deviations),
 /// `errors` and `covariance` as `.png` and `.svg` into `dir`; returns the
 /// paths written.
 ///
@@ -411,7 +412,7 @@ fn draw_covariance<DB: DrawingBackend>(
 pub fn write_all(
     dir: &Path,
     samples: &[Sample],
-    walls: &[Segment<f64>],
+    (walls, walls_label): (&[Segment<f64>], &str),
     title: &str,
     ellipse_sigma: f64,
 ) -> Result<Vec<PathBuf>> {
@@ -435,7 +436,7 @@ pub fn write_all(
             draw_map(
                 &BitMapBackend::new(&map, side).into_drawing_area(),
                 samples,
-                walls,
+                (walls, walls_label),
                 &map_title,
                 ellipse_sigma,
             )
@@ -443,7 +444,7 @@ pub fn write_all(
             draw_map(
                 &SVGBackend::new(&map, side).into_drawing_area(),
                 samples,
-                walls,
+                (walls, walls_label),
                 &map_title,
                 ellipse_sigma,
             )

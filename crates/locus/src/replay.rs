@@ -212,6 +212,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path) -> Result<()> {
         dt,
         laps: None,
         walls: crosses(log),
+        map_label: "landmarks",
     };
     let metrics_path = out.join("metrics.json");
     fs::write(
@@ -224,8 +225,13 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path) -> Result<()> {
         Vec::new()
     } else {
         let title = format!("locus replay {}", log.name);
-        let mut written =
-            crate::plot::write_all(out, &samples, &info.walls, &title, common.ellipse_sigma)?;
+        let mut written = crate::plot::write_all(
+            out,
+            &samples,
+            (&info.walls, info.map_label),
+            &title,
+            common.ellipse_sigma,
+        )?;
         if samples.iter().any(|s| s.correction.is_some()) {
             written.extend(crate::plot::write_nis(out, &samples, &title)?);
         }

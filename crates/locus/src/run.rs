@@ -106,6 +106,9 @@ pub struct Info {
     pub laps: Option<usize>,
     /// The map's walls (m, world frame), for the pictures.
     pub walls: Vec<Segment<f64>>,
+    /// What the map's segments are, for the picture's legend (`walls`, or
+    /// `landmarks` drawn as crosses).
+    pub map_label: &'static str,
 }
 
 /// The square scenario's configuration with the command-line overrides.
@@ -129,6 +132,7 @@ fn square_info(name: &str, cfg: &SquareConfig) -> Info {
         dt: cfg.dt,
         laps: Some(cfg.laps),
         walls: locus_sim::World::square_arena().walls,
+        map_label: "walls",
     }
 }
 
@@ -187,6 +191,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
                 dt: cfg.dt,
                 laps: None,
                 walls: locus_sim::World::wall45(cfg.wall_a).walls,
+                map_label: "walls",
             };
             execute(args, &info, &out, |seed, mut sink| {
                 run_wall45(&cfg, seed, &mut sink)
@@ -201,6 +206,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
                 dt: cfg.dt,
                 laps: None,
                 walls: room(cfg.room).walls,
+                map_label: "walls",
             };
             // The slip-rejecting odometry's errors (the table's odometry row
             // is the rear-only one), for the line printed after the table.
@@ -242,6 +248,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
                 dt: cfg.dt,
                 laps: None,
                 walls: Vec::new(),
+                map_label: "walls",
             };
             execute(args, &info, &out, |seed, mut sink| {
                 run_hover(&cfg, seed, &mut sink)
@@ -309,7 +316,13 @@ where
         Vec::new()
     } else {
         let title = format!("locus run {}, seed {}", info.name, args.seed);
-        crate::plot::write_all(out, &samples, &info.walls, &title, args.ellipse_sigma)?
+        crate::plot::write_all(
+            out,
+            &samples,
+            (&info.walls, info.map_label),
+            &title,
+            args.ellipse_sigma,
+        )?
     };
 
     let mut text = summary_text(args, info, &summary);
