@@ -27,12 +27,11 @@ use std::time::Instant;
 use locus_link::{Command as LinkCommand, MAX_PACKET, Receiver, Status, Telemetry};
 use locus_odometry::{Wheel as EncoderWheel, wrapping_diff};
 use locus_sim::closed_loop::{Error as SimError, NoiseModel, SquareConfig};
-use locus_sim::robot::{Command, Kinematics, Pose, Robot, SlipSchedule, Wheel};
+use locus_sim::robot::{Command, Pose, Robot};
 use locus_sim::sensors::{Encoder, IrPairSensor, SharpIr};
 use locus_sim::world::World;
 use rand::SeedableRng;
 use rand::rngs::StdRng;
-use rand_distr::{Distribution, StandardNormal};
 
 use crate::{Error, at_least_1us, is_timeout};
 
@@ -116,41 +115,7 @@ impl Sim {
             ));
         }
         let mut rng = StdRng::seed_from_u64(seed);
-        let mut draw = |std: f64| -> f64 {
-            let n: f64 = StandardNormal.sample(&mut rng);
-            std * n
-        };
-        let (s, sd) = (cfg.start, cfg.initial_std);
-        let true_start = Pose::new(s[0] + draw(sd[0]), s[1] + draw(sd[1]), s[2] + draw(sd[2]));
-        let lap_length = 8.0 * locus_control::SQUARE_HALF_SIDE;
-        let mut slip = SlipSchedule::random_bumps(
-            &mut rng,
-            Wheel::Left,
-            (0.0, lap_length),
-            cfg.slip_bumps_per_wheel,
-            cfg.slip_length,
-            cfg.slip_scale,
-        );
-        for z in SlipSchedule::random_bumps(
-            &mut rng,
-            Wheel::Right,
-            (0.0, lap_length),
-            cfg.slip_bumps_per_wheel,
-            cfg.slip_length,
-            cfg.slip_scale,
-        )
-        .zones
-        {
-            slip.push(z);
-        }
-        let robot = Robot::new(
-            Kinematics::DifferentialDrive {
-                wheelbase: cfg.wheelbase,
-                wheel_radius: cfg.wheel_radius,
-            },
-            true_start,
-        )
-        .with_slip(slip);
+        let (robot, _) = cfg.true_robot(&mut rng);
         let wheel = EncoderWheel::new(cfg.encoder_lines, cfg.encoder_gear, cfg.wheel_radius);
         let enc = [Encoder::new(wheel)?, Encoder::new(wheel)?];
         let last = [enc[0].read(), enc[1].read()];

@@ -264,6 +264,51 @@ impl Default for SquareConfig {
 }
 
 impl SquareConfig {
+    /// The true robot of a run, and its start pose: the start drawn from
+    /// the initial estimate's distribution (`start`, `initial_std`), then
+    /// the slip bumps of each wheel over the first lap. Draws from `rng` in
+    /// this fixed order, so [`run_square`] and the UDP robot endpoint
+    /// (`locus-net`) simulate the same robot from the same seed.
+    pub fn true_robot(&self, rng: &mut StdRng) -> (Robot, Pose) {
+        let mut draw = |std: f64| -> f64 {
+            let n: f64 = StandardNormal.sample(rng);
+            std * n
+        };
+        let (s, sd) = (self.start, self.initial_std);
+        let true_start = Pose::new(s[0] + draw(sd[0]), s[1] + draw(sd[1]), s[2] + draw(sd[2]));
+        // Slip bumps over the first lap's wheel travel.
+        let lap_length = 8.0 * locus_control::SQUARE_HALF_SIDE;
+        let mut slip = SlipSchedule::random_bumps(
+            rng,
+            Wheel::Left,
+            (0.0, lap_length),
+            self.slip_bumps_per_wheel,
+            self.slip_length,
+            self.slip_scale,
+        );
+        for z in SlipSchedule::random_bumps(
+            rng,
+            Wheel::Right,
+            (0.0, lap_length),
+            self.slip_bumps_per_wheel,
+            self.slip_length,
+            self.slip_scale,
+        )
+        .zones
+        {
+            slip.push(z);
+        }
+        let robot = Robot::new(
+            Kinematics::DifferentialDrive {
+                wheelbase: self.wheelbase,
+                wheel_radius: self.wheel_radius,
+            },
+            true_start,
+        )
+        .with_slip(slip);
+        (robot, true_start)
+    }
+
     /// The `square-ideal` scenario: the default configuration with
     /// [`NoiseModel::Ideal`] (simulated noise exactly as the filter's `Q` and
     /// `R` assume: no slip, no quantisation, no calibration error) and no
@@ -601,45 +646,8 @@ pub fn run_square(
     let mut rng = StdRng::seed_from_u64(seed);
     let world = World::square_arena();
 
-    // True start drawn from the initial estimate's distribution.
-    let mut draw = |std: f64| -> f64 {
-        let n: f64 = StandardNormal.sample(&mut rng);
-        std * n
-    };
-    let s = cfg.start;
-    let sd = cfg.initial_std;
-    let true_start = Pose::new(s[0] + draw(sd[0]), s[1] + draw(sd[1]), s[2] + draw(sd[2]));
-
-    // Slip bumps over the first lap's wheel travel.
-    let lap_length = 8.0 * locus_control::SQUARE_HALF_SIDE;
-    let mut slip = SlipSchedule::random_bumps(
-        &mut rng,
-        Wheel::Left,
-        (0.0, lap_length),
-        cfg.slip_bumps_per_wheel,
-        cfg.slip_length,
-        cfg.slip_scale,
-    );
-    for z in SlipSchedule::random_bumps(
-        &mut rng,
-        Wheel::Right,
-        (0.0, lap_length),
-        cfg.slip_bumps_per_wheel,
-        cfg.slip_length,
-        cfg.slip_scale,
-    )
-    .zones
-    {
-        slip.push(z);
-    }
-    let mut robot = Robot::new(
-        Kinematics::DifferentialDrive {
-            wheelbase: cfg.wheelbase,
-            wheel_radius: cfg.wheel_radius,
-        },
-        true_start,
-    )
-    .with_slip(slip);
+    let (mut robot, true_start) = cfg.true_robot(&mut rng);
+    let (s, sd) = (cfg.start, cfg.initial_std);
 
     let wheel = EncoderWheel::new(cfg.encoder_lines, cfg.encoder_gear, cfg.wheel_radius);
     let mut enc_right = Encoder::new(wheel)?;
