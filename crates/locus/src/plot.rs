@@ -87,6 +87,19 @@ fn ellipse(centre: [f64; 2], a: f64, b: f64, c: f64, k: f64) -> Vec<(f64, f64)> 
         .collect()
 }
 
+/// Draws with `$draw` (a function taking the drawing area first) on a PNG
+/// backend if `$ext` is `"png"`, else on an SVG one, at `$path` and `$size`.
+/// A macro because the two backends are different types.
+macro_rules! on_backend {
+    ($ext:expr, $path:expr, $size:expr, $draw:ident($($arg:expr),* $(,)?)) => {
+        if $ext == "png" {
+            $draw(&BitMapBackend::new($path, $size).into_drawing_area(), $($arg),*)
+        } else {
+            $draw(&SVGBackend::new($path, $size).into_drawing_area(), $($arg),*)
+        }
+    };
+}
+
 /// A plotters error as an anyhow error.
 fn err<E: core::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow!("drawing: {e:?}")
@@ -432,52 +445,17 @@ pub fn write_all(
         let err_title = format!("{title}: EKF errors and +-3 sigma");
         let cov_title = format!("{title}: EKF variances");
         let side = (MAP_SIDE, MAP_SIDE);
-        if ext == "png" {
-            draw_map(
-                &BitMapBackend::new(&map, side).into_drawing_area(),
-                samples,
-                (walls, walls_label),
-                &map_title,
-                ellipse_sigma,
-            )
-        } else {
-            draw_map(
-                &SVGBackend::new(&map, side).into_drawing_area(),
-                samples,
-                (walls, walls_label),
-                &map_title,
-                ellipse_sigma,
-            )
-        }
+        on_backend!(
+            ext,
+            &map,
+            side,
+            draw_map(samples, (walls, walls_label), &map_title, ellipse_sigma)
+        )
         .with_context(|| format!("writing {}", map.display()))?;
-        if ext == "png" {
-            draw_errors(
-                &BitMapBackend::new(&errors, SIZE).into_drawing_area(),
-                samples,
-                &err_title,
-            )
-        } else {
-            draw_errors(
-                &SVGBackend::new(&errors, SIZE).into_drawing_area(),
-                samples,
-                &err_title,
-            )
-        }
-        .with_context(|| format!("writing {}", errors.display()))?;
-        if ext == "png" {
-            draw_covariance(
-                &BitMapBackend::new(&cov, SIZE).into_drawing_area(),
-                samples,
-                &cov_title,
-            )
-        } else {
-            draw_covariance(
-                &SVGBackend::new(&cov, SIZE).into_drawing_area(),
-                samples,
-                &cov_title,
-            )
-        }
-        .with_context(|| format!("writing {}", cov.display()))?;
+        on_backend!(ext, &errors, SIZE, draw_errors(samples, &err_title))
+            .with_context(|| format!("writing {}", errors.display()))?;
+        on_backend!(ext, &cov, SIZE, draw_covariance(samples, &cov_title))
+            .with_context(|| format!("writing {}", cov.display()))?;
         written.extend([map, errors, cov]);
     }
     Ok(written)
@@ -520,16 +498,8 @@ pub fn write_nis(dir: &Path, samples: &[Sample], title: &str) -> Result<Vec<Path
     for ext in ["png", "svg"] {
         let path = dir.join(format!("nis.{ext}"));
         let t = format!("{title}: NIS and its {NIS_WINDOW}-correction mean");
-        if ext == "png" {
-            draw_nis(
-                &BitMapBackend::new(&path, SIZE).into_drawing_area(),
-                &rows,
-                &t,
-            )
-        } else {
-            draw_nis(&SVGBackend::new(&path, SIZE).into_drawing_area(), &rows, &t)
-        }
-        .with_context(|| format!("writing {}", path.display()))?;
+        on_backend!(ext, &path, SIZE, draw_nis(&rows, &t))
+            .with_context(|| format!("writing {}", path.display()))?;
         written.push(path);
     }
     Ok(written)

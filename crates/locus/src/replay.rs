@@ -20,7 +20,7 @@ use locus_replay::{Config, Log, Report, replay};
 use locus_sim::scenario::Sample;
 
 use crate::output::print_out;
-use crate::run::{Info, json_str, metrics_json_with, num, summary_tables};
+use crate::run::{Info, files_written, json_str, metrics_json_with, num, summary_tables};
 
 /// Arguments of `locus replay`.
 #[derive(ClapArgs, Debug)]
@@ -247,19 +247,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path) -> Result<()> {
     );
     text.push_str(&summary_tables(&info, &report.summary));
     text.push_str(&format!("{}\n", counts_table(cfg, &report)));
-    text.push_str(&format!("log: {}\n", csv_path.display()));
-    text.push_str(&format!("metrics: {}\n", metrics_path.display()));
-    if !pictures.is_empty() {
-        let names: Vec<String> = pictures
-            .iter()
-            .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
-            .collect();
-        text.push_str(&format!(
-            "pictures: {} in {}\n",
-            names.join(", "),
-            out.display()
-        ));
-    }
+    text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
     print_out(&text)
 }
 

@@ -326,8 +326,23 @@ where
     };
 
     let mut text = summary_text(args, info, &summary);
-    text.push_str(&format!("log: {}\n", csv_path.display()));
-    text.push_str(&format!("metrics: {}\n", metrics_path.display()));
+    text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
+    print_out(&text)
+}
+
+/// The lines naming the files a single run wrote: the log, the metrics and
+/// the pictures (if any) in `out`.
+pub(crate) fn files_written(
+    csv_path: &Path,
+    metrics_path: &Path,
+    pictures: &[PathBuf],
+    out: &Path,
+) -> String {
+    let mut text = format!(
+        "log: {}\nmetrics: {}\n",
+        csv_path.display(),
+        metrics_path.display()
+    );
     if !pictures.is_empty() {
         let names: Vec<String> = pictures
             .iter()
@@ -339,7 +354,7 @@ where
             out.display()
         ));
     }
-    print_out(&text)
+    text
 }
 
 /// A figure for the table: `scale * v` with `decimals`, or `n/a` when `v`
