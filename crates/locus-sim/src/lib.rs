@@ -10,6 +10,7 @@
 #![forbid(unsafe_code)]
 
 pub mod closed_loop;
+pub mod firmware_data;
 pub mod guide;
 pub mod hover;
 pub mod robot;

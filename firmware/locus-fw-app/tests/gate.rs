@@ -1,0 +1,33 @@
+//! The firmware's precomputed gate threshold is the filter's own gate
+//! (host-only checks; no emulation).
+
+use locus_core::ChiSquareGate;
+use locus_fw_app::{Firmware, run, run_with, square_data::CONFIG};
+
+#[test]
+fn the_embedded_threshold_is_the_f32_gates_2_dof_threshold() {
+    let gate = ChiSquareGate::<f32>::new(CONFIG.gate_confidence).expect("gate");
+    assert_eq!(
+        CONFIG.gate_threshold.to_bits(),
+        gate.threshold(2).to_bits(),
+        "regenerate square_data.rs: threshold {} vs {}",
+        CONFIG.gate_threshold,
+        gate.threshold(2)
+    );
+}
+
+#[test]
+fn gating_on_the_threshold_equals_the_filters_gate_bit_for_bit() {
+    let ours = run().expect("run");
+    let library = run_with(Firmware::with_library_gate(&CONFIG).expect("gate")).expect("run");
+    assert_eq!(ours, library);
+    // The gate did reject something, so the comparison covers both branches.
+    assert!(ours.rejected > 0 && ours.corrections > 0, "{ours:?}");
+}
+
+#[test]
+fn a_nan_threshold_is_refused() {
+    let mut cfg = CONFIG;
+    cfg.gate_threshold = f32::NAN;
+    assert!(Firmware::new(&cfg).is_err());
+}

@@ -1,0 +1,212 @@
+//! Locus on a Cortex-M4F (issue 10): runs [`locus_fw_app`]'s recorded
+//! `square` sequence (quadrature decoding, the paper-001 EKF with IR wall
+//! corrections, CORDIC odometry, all `f32`) and prints, over semihosting, the
+//! final belief and odometry pose (as `f32` bit patterns and decimals), the
+//! checksum of every step's state, the stack high-water mark and the SysTick
+//! ticks spent in each part of the step; then exits with success (or failure
+//! on any error or panic).
+//!
+//! Built for `thumbv7em-none-eabihf` and run by `cargo run --release` under
+//! `qemu-system-arm -machine mps2-an386` (see `.cargo/config.toml`). Under
+//! QEMU's `-icount shift=N` the virtual clock advances `2^N` ns per executed
+//! instruction, so the SysTick ticks count instructions; the firmware
+//! calibrates them against a block of exactly [`CALIBRATION_NOPS`] `nop`s
+//! and reports ticks, which the host test converts.
+//!
+//! Output: one `key value` line per figure (see [`locus_fw_app::Report`]),
+//! `f32`s as `key 0xBITS decimal`.
+#![no_std]
+#![no_main]
+
+use core::arch::asm;
+
+use cortex_m::peripheral::SYST;
+use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use locus_fw_app::{Firmware, square_data};
+
+/// `nop`s in the calibration block (`.rept` in inline assembly, so exactly
+/// this many instructions).
+const CALIBRATION_NOPS: u32 = 4096;
+
+/// Bytes of stack painted below `main`'s frame for the high-water mark.
+const PAINT_BYTES: usize = 32 * 1024;
+/// Gap left unpainted just below the stack pointer while painting (the
+/// painting code's own use).
+const PAINT_GAP: usize = 256;
+/// The paint pattern.
+const PAINT: u32 = 0xDEAD_BEEF;
+
+/// Ticks spent in each part of the step, summed over the run, and how many
+/// steps of each kind.
+#[derive(Default)]
+struct Ticks {
+    decode: u32,
+    predict_only: u32,
+    predict_only_steps: u32,
+    with_ir: u32,
+    with_ir_steps: u32,
+    odometry: u32,
+    checksum: u32,
+}
+
+/// SysTick's current value (counts down, 24 bits).
+#[inline(always)]
+fn now() -> u32 {
+    SYST::get_current()
+}
+
+/// Ticks from `start` to `end` on the down-counting 24-bit SysTick.
+#[inline(always)]
+fn elapsed(start: u32, end: u32) -> u32 {
+    start.wrapping_sub(end) & 0x00FF_FFFF
+}
+
+/// Paints the stack from `PAINT_BYTES` below the current stack pointer to
+/// `PAINT_GAP` below it; returns the lowest painted address.
+#[allow(unsafe_code)]
+#[inline(always)]
+fn paint_stack() -> usize {
+    let sp = cortex_m::register::msp::read() as usize;
+    let bottom = sp - PAINT_BYTES;
+    let mut a = bottom;
+    while a < sp - PAINT_GAP {
+        // SAFETY: the words between `bottom` and `sp - PAINT_GAP` are free
+        // stack below the current frame (4 MiB of RAM, nothing else lives
+        // there), written with volatile stores before any callee uses them.
+        unsafe { core::ptr::write_volatile(a as *mut u32, PAINT) };
+        a += 4;
+    }
+    bottom
+}
+
+/// The lowest address above `bottom` whose paint was overwritten.
+#[allow(unsafe_code)]
+fn lowest_used(bottom: usize) -> usize {
+    let mut a = bottom;
+    // SAFETY: reads of the painted region, which is ours.
+    while unsafe { core::ptr::read_volatile(a as *const u32) } == PAINT {
+        a += 4;
+    }
+    a
+}
+
+/// The top of the stack (`_stack_start` of cortex-m-rt's `link.x`).
+#[allow(unsafe_code)]
+fn stack_top() -> usize {
+    unsafe extern "C" {
+        static _stack_start: u32;
+    }
+    // SAFETY: only the symbol's address is taken.
+    (&raw const _stack_start) as usize
+}
+
+/// Ticks of `CALIBRATION_NOPS` `nop`s, and of an empty bracket.
+#[allow(unsafe_code)]
+#[inline(never)]
+fn calibrate() -> (u32, u32) {
+    let t0 = now();
+    // SAFETY: `nop`s only.
+    unsafe {
+        asm!(
+            ".rept 4096",
+            "nop",
+            ".endr",
+            options(nomem, nostack, preserves_flags)
+        )
+    };
+    let t1 = now();
+    let t2 = now();
+    (elapsed(t0, t1), elapsed(t1, t2))
+}
+
+fn fail(what: &dyn core::fmt::Display) -> ! {
+    hprintln!("error {}", what);
+    debug::exit(debug::EXIT_FAILURE);
+    loop {
+        cortex_m::asm::bkpt();
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let Some(mut core) = cortex_m::Peripherals::take() else {
+        fail(&"core peripherals already taken");
+    };
+    core.SYST.set_clock_source(SystClkSource::Core);
+    core.SYST.set_reload(0x00FF_FFFF);
+    core.SYST.clear_current();
+    core.SYST.enable_counter();
+
+    let painted_bottom = paint_stack();
+    let (calibration, bracket) = calibrate();
+
+    let mut ticks = Ticks::default();
+    let mut fw = match Firmware::new(&square_data::CONFIG) {
+        Ok(fw) => fw,
+        Err(e) => fail(&e),
+    };
+    for (samples, ir) in square_data::WAVEFORM.iter().zip(square_data::IR.iter()) {
+        let t0 = now();
+        let u = fw.decode(*samples);
+        let t1 = now();
+        if let Err(e) = fw.filter_step(&u, *ir) {
+            fail(&e);
+        }
+        let t2 = now();
+        fw.odometry_step(&u);
+        let t3 = now();
+        fw.finish_step();
+        let t4 = now();
+        ticks.decode += elapsed(t0, t1);
+        if ir.is_some() {
+            ticks.with_ir += elapsed(t1, t2);
+            ticks.with_ir_steps += 1;
+        } else {
+            ticks.predict_only += elapsed(t1, t2);
+            ticks.predict_only_steps += 1;
+        }
+        ticks.odometry += elapsed(t2, t3);
+        ticks.checksum += elapsed(t3, t4);
+    }
+    let report = fw.report();
+    let lowest = lowest_used(painted_bottom);
+    if lowest == painted_bottom {
+        fail(&"the stack went below the painted region");
+    }
+
+    hprintln!("locus-fw {}", env!("CARGO_PKG_VERSION"));
+    for (name, value) in report.floats() {
+        hprintln!("{} 0x{:08x} {}", name, value.to_bits(), value);
+    }
+    for (name, value) in report.integers() {
+        hprintln!("{} {}", name, value);
+    }
+    hprintln!("stack_high_water {}", stack_top() - lowest);
+    hprintln!("firmware_state_bytes {}", core::mem::size_of::<Firmware>());
+    hprintln!("calibration_nops {}", CALIBRATION_NOPS);
+    hprintln!("ticks_calibration {}", calibration);
+    hprintln!("ticks_bracket {}", bracket);
+    hprintln!("ticks_decode {}", ticks.decode);
+    hprintln!("ticks_predict_only {}", ticks.predict_only);
+    hprintln!("steps_predict_only {}", ticks.predict_only_steps);
+    hprintln!("ticks_with_ir {}", ticks.with_ir);
+    hprintln!("steps_with_ir {}", ticks.with_ir_steps);
+    hprintln!("ticks_odometry {}", ticks.odometry);
+    hprintln!("ticks_checksum {}", ticks.checksum);
+    hprintln!("done");
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {
+        cortex_m::asm::bkpt();
+    }
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    hprintln!("panic {}", info);
+    debug::exit(debug::EXIT_FAILURE);
+    loop {
+        cortex_m::asm::bkpt();
+    }
+}
