@@ -3,6 +3,9 @@
 # missing: rustfmt/clippy, the thumbv7em-none-eabihf target (the core must
 # build for a Cortex-M4F), and the pinned Python packages of the filterpy
 # cross-check (scripts/requirements-crosscheck.txt).
+# The firmware (firmware/, its own workspace) also needs qemu-system-arm
+# (Debian's package; installed with apt-get when missing) and rustup's
+# llvm-tools (llvm-nm for the footprint).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -14,6 +17,16 @@ for c in rustfmt clippy; do
   grep -q "^$c" <<<"$installed_components" || rustup component add "$c"
 done
 rustup target list --installed | grep -qx thumbv7em-none-eabihf || rustup target add thumbv7em-none-eabihf
+
+step "firmware tools: qemu-system-arm (mps2-an386), llvm-tools"
+if ! command -v qemu-system-arm >/dev/null 2>&1; then
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO=sudo; fi
+  $SUDO apt-get update
+  $SUDO apt-get install -y qemu-system-arm
+fi
+grep -q "^llvm-tools" <<<"$installed_components" || rustup component add llvm-tools
+HOST_TRIPLE=$(rustc -vV | sed -n 's/^host: //p')
 
 step "python: filterpy cross-check requirements"
 PY=${LOCUS_PYTHON:-python3}
@@ -43,6 +56,14 @@ cargo test --workspace --locked
 
 step "benchmarks compile"
 cargo bench --workspace --locked --no-run
+
+step "firmware: format, clippy (thumbv7em-none-eabihf and host)"
+(cd firmware && cargo fmt --all -- --check)
+(cd firmware && cargo clippy --locked --release -p locus-fw -p locus-fw-app -- -D warnings)
+(cd firmware && cargo clippy --locked --target "$HOST_TRIPLE" -p locus-fw-app --all-targets -- -D warnings)
+
+step "firmware: under QEMU mps2-an386, bit-identical to the host f32 run; footprint; instructions per step"
+(cd firmware && cargo test --locked --target "$HOST_TRIPLE" -p locus-fw-app -- --nocapture)
 
 echo
 echo "all tests passed"
