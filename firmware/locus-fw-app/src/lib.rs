@@ -19,8 +19,8 @@
 //!    the count quantum `dP = pi R / (2 N G)` are the wheel travels `d1`
 //!    (right), `d2` (left) of paper 001 eq. 9.
 //! 2. [`Firmware::filter_step`]: EKF prediction with [`DiffDrive`] (paper
-//!    001 eq. 7-13); if the step has an IR reading, data association on the
-//!    predicted pose ([`associate_ir_wall`]) and, for an axis-aligned wall,
+//!    001 eq. 7-13, [`Firmware::predict`]); if the step has an IR reading
+//!    ([`Firmware::correct`]), data association on the predicted pose ([`associate_ir_wall`]) and, for an axis-aligned wall,
 //!    the correction with [`IrPairObservation`] (eq. 3-5, 17-20), Joseph
 //!    form, behind a 99 % chi-square gate on the NIS (threshold precomputed
 //!    on the host, see [`Config::gate_threshold`]).
@@ -323,25 +323,49 @@ impl Firmware {
         }
     }
 
-    /// The EKF step: prediction with the wheel travels `u`, then, if the
-    /// step has IR readings `ir = [d_s1, d_s2]` (m), association and
-    /// correction (see the [crate documentation](crate)).
+    /// The EKF step: [`predict`](Self::predict) with the wheel travels `u`,
+    /// then, if the step has IR readings `ir = [d_s1, d_s2]` (m),
+    /// [`correct`](Self::correct).
     ///
     /// # Errors
     /// [`Error::Filter`] if the filter rejects an input (the belief is then
     /// unchanged).
-    #[inline(never)]
     pub fn filter_step(&mut self, u: &WheelTravel<f32>, ir: Option<[f32; 2]>) -> Result<(), Error> {
+        self.predict(u)?;
+        match ir {
+            Some(readings) => self.correct(readings),
+            None => Ok(()),
+        }
+    }
+
+    /// EKF prediction with [`DiffDrive`] (paper 001 eq. 7-13):
+    /// `X- = f(X+, u, 0)`, `P- = A P+ A^T + W Q W^T`.
+    ///
+    /// # Errors
+    /// [`Error::Filter`] for a non-finite input (the belief is unchanged).
+    #[inline(never)]
+    pub fn predict(&mut self, u: &WheelTravel<f32>) -> Result<(), Error> {
         let step = self.steps;
-        let fail = |error| Error::Filter { step, error };
-        let prior = self
+        self.belief = self
             .ekf
             .predict(&self.belief, &self.model, u)
-            .map_err(fail)?;
-        self.belief = prior;
-        let Some([ds1, ds2]) = ir else {
-            return Ok(());
-        };
+            .map_err(|error| Error::Filter { step, error })?;
+        Ok(())
+    }
+
+    /// Data association of the readings `[d_s1, d_s2]` (m) on the current
+    /// (predicted) pose ([`associate_ir_wall`]: the wall the sensing ray
+    /// hits within `association_range`) and, for an axis-aligned wall, the
+    /// EKF correction with [`IrPairObservation`] (paper 001 eq. 3-5,
+    /// 17-20; Joseph form), kept only if the NIS passes the gate.
+    ///
+    /// # Errors
+    /// [`Error::Filter`] if the filter rejects the measurement (the belief
+    /// is unchanged).
+    #[inline(never)]
+    pub fn correct(&mut self, [ds1, ds2]: [f32; 2]) -> Result<(), Error> {
+        let step = self.steps;
+        let prior = self.belief;
         let Some(wall) = associate_ir_wall(
             &prior.x,
             &self.pair,
@@ -359,7 +383,10 @@ impl Firmware {
             r11: self.r[0],
             r22: self.r[1],
         };
-        let c = self.ekf.correct(&prior, &obs, &obs.z()).map_err(fail)?;
+        let c = self
+            .ekf
+            .correct(&prior, &obs, &obs.z())
+            .map_err(|error| Error::Filter { step, error })?;
         // `<=` as `ChiSquareGate::accepts` (false for NaN).
         if c.applied && c.nis <= self.gate_threshold {
             self.corrections += 1;

@@ -223,30 +223,41 @@ fn instructions_per_step_under_icount() {
     let fw = emulated();
     let steps = fw.u64("steps");
     let per = |ticks: &str, n: u64| instructions(fw, fw.u64(ticks)) / n as f64;
+    let ir_steps = fw.u64("steps_with_ir");
+    let max = |ticks: &str| instructions(fw, fw.u64(ticks));
     let rows = [
         (
-            "quadrature decode, 2 wheels x 8 samples",
+            "quadrature decode (2 wheels x 8 samples)",
             per("ticks_decode", steps),
+            None,
         ),
         (
-            "EKF predict only (step without IR)",
-            per("ticks_predict_only", fw.u64("steps_predict_only")),
+            "EKF predict (DiffDrive)",
+            per("ticks_predict", steps),
+            Some(max("ticks_predict_max")),
         ),
         (
-            "EKF predict + association + correction (step with IR)",
-            per("ticks_with_ir", fw.u64("steps_with_ir")),
+            "IR association + EKF correction (steps with IR)",
+            per("ticks_correct", ir_steps),
+            Some(max("ticks_correct_max")),
         ),
-        ("CORDIC odometry pose", per("ticks_odometry", steps)),
-        ("checksum (harness)", per("ticks_checksum", steps)),
+        ("CORDIC odometry pose", per("ticks_odometry", steps), None),
+        ("checksum (harness)", per("ticks_checksum", steps), None),
     ];
     println!("instructions per step (QEMU -icount shift={ICOUNT_SHIFT}, mean over the run):");
-    for (what, n) in rows {
-        println!("  {what:<55} {n:>8.0}");
+    println!("  {:<50} {:>8} {:>8}", "part", "mean", "max");
+    for (what, n, max) in rows {
+        let max = max.map_or_else(String::new, |m| format!("{m:.0}"));
+        println!("  {what:<50} {n:>8.0} {max:>8}");
         assert!(
             n > 10.0 && n < 1.0e6,
             "{what}: {n} instructions is implausible"
         );
     }
+    println!(
+        "  ({steps} steps, {ir_steps} with IR readings; max: the largest single step; \
+         +-1 SysTick tick = +-0.6 instruction per bracket)"
+    );
     // The calibration is 1.6 ticks per instruction: SysTick at the board's
     // 25 MHz (40 ns) against 64 ns per instruction.
     let per_insn = (fw.u64("ticks_calibration") - fw.u64("ticks_bracket")) as f64

@@ -43,10 +43,11 @@ const PAINT: u32 = 0xDEAD_BEEF;
 #[derive(Default)]
 struct Ticks {
     decode: u32,
-    predict_only: u32,
-    predict_only_steps: u32,
-    with_ir: u32,
-    with_ir_steps: u32,
+    predict: u32,
+    predict_max: u32,
+    correct: u32,
+    correct_max: u32,
+    corrections: u32,
     odometry: u32,
     checksum: u32,
 }
@@ -151,24 +152,32 @@ fn main() -> ! {
         let t0 = now();
         let u = fw.decode(*samples);
         let t1 = now();
-        if let Err(e) = fw.filter_step(&u, *ir) {
+        if let Err(e) = fw.predict(&u) {
             fail(&e);
         }
         let t2 = now();
-        fw.odometry_step(&u);
-        let t3 = now();
-        fw.finish_step();
-        let t4 = now();
-        ticks.decode += elapsed(t0, t1);
-        if ir.is_some() {
-            ticks.with_ir += elapsed(t1, t2);
-            ticks.with_ir_steps += 1;
-        } else {
-            ticks.predict_only += elapsed(t1, t2);
-            ticks.predict_only_steps += 1;
+        if let Some(readings) = ir {
+            if let Err(e) = fw.correct(*readings) {
+                fail(&e);
+            }
         }
-        ticks.odometry += elapsed(t2, t3);
-        ticks.checksum += elapsed(t3, t4);
+        let t3 = now();
+        fw.odometry_step(&u);
+        let t4 = now();
+        fw.finish_step();
+        let t5 = now();
+        ticks.decode += elapsed(t0, t1);
+        let predict = elapsed(t1, t2);
+        ticks.predict += predict;
+        ticks.predict_max = ticks.predict_max.max(predict);
+        if ir.is_some() {
+            let correct = elapsed(t2, t3);
+            ticks.correct += correct;
+            ticks.correct_max = ticks.correct_max.max(correct);
+            ticks.corrections += 1;
+        }
+        ticks.odometry += elapsed(t3, t4);
+        ticks.checksum += elapsed(t4, t5);
     }
     let report = fw.report();
     let lowest = lowest_used(painted_bottom);
@@ -189,10 +198,11 @@ fn main() -> ! {
     hprintln!("ticks_calibration {}", calibration);
     hprintln!("ticks_bracket {}", bracket);
     hprintln!("ticks_decode {}", ticks.decode);
-    hprintln!("ticks_predict_only {}", ticks.predict_only);
-    hprintln!("steps_predict_only {}", ticks.predict_only_steps);
-    hprintln!("ticks_with_ir {}", ticks.with_ir);
-    hprintln!("steps_with_ir {}", ticks.with_ir_steps);
+    hprintln!("ticks_predict {}", ticks.predict);
+    hprintln!("ticks_predict_max {}", ticks.predict_max);
+    hprintln!("ticks_correct {}", ticks.correct);
+    hprintln!("ticks_correct_max {}", ticks.correct_max);
+    hprintln!("steps_with_ir {}", ticks.corrections);
     hprintln!("ticks_odometry {}", ticks.odometry);
     hprintln!("ticks_checksum {}", ticks.checksum);
     hprintln!("done");
