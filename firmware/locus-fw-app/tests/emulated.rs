@@ -20,6 +20,7 @@
 
 use core::time::Duration;
 use std::collections::BTreeMap;
+use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::OnceLock;
@@ -119,6 +120,28 @@ fn emulated() -> &'static Emulated {
                      apt-get install qemu-system-arm; scripts/test.sh does)"
                 )
             });
+        // Drain both pipes on threads, so a full pipe cannot stall QEMU.
+        let drain = |pipe: Option<Box<dyn Read + Send>>| {
+            std::thread::spawn(move || {
+                let mut text = Vec::new();
+                if let Some(mut p) = pipe {
+                    let _ = p.read_to_end(&mut text);
+                }
+                text
+            })
+        };
+        let stdout = drain(
+            child
+                .stdout
+                .take()
+                .map(|p| Box::new(p) as Box<dyn Read + Send>),
+        );
+        let stderr = drain(
+            child
+                .stderr
+                .take()
+                .map(|p| Box::new(p) as Box<dyn Read + Send>),
+        );
         let start = Instant::now();
         let status = loop {
             if let Some(status) = child.try_wait().expect("waiting for qemu") {
@@ -131,9 +154,10 @@ fn emulated() -> &'static Emulated {
             }
             std::thread::sleep(Duration::from_millis(20));
         };
-        let out = child.wait_with_output().expect("qemu output");
-        let raw = String::from_utf8_lossy(&out.stdout).into_owned();
-        let err = String::from_utf8_lossy(&out.stderr);
+        let out_stdout = stdout.join().expect("stdout reader");
+        let out_stderr = stderr.join().expect("stderr reader");
+        let raw = String::from_utf8_lossy(&out_stdout).into_owned();
+        let err = String::from_utf8_lossy(&out_stderr);
         assert!(
             status.success(),
             "the firmware failed under QEMU ({status}):\n{raw}\n{err}"
@@ -464,8 +488,8 @@ fn symbols(elf: &Path) -> Vec<Symbol> {
 ///
 /// **RAM** is the stack high-water mark the firmware measured (painted stack
 /// below `main`, from reset to the end of the run, before any printing; it
-/// includes the 528-byte `Firmware` state in `main`'s frame, the run's
-/// timing counters and cortex-m-rt's reset frame) plus `.data` and `.bss`
+/// includes the `Firmware` state in `main`'s frame, the run's timing
+/// counters and cortex-m-rt's reset frame) plus `.data` and `.bss`
 /// (kinds d/D/b/B symbols: cortex-m's `TAKEN` flag and semihosting's
 /// handle, counted in full). No heap.
 #[test]
