@@ -241,6 +241,12 @@ pub fn generate(seed: u64, steps: usize) -> Result<String, GenerateError> {
         "pub const SIM_ESTIMATE: [f64; 3] = [{:?}, {:?}, {:?}];",
         last.ekf[0], last.ekf[1], last.ekf[2]
     );
+    let _ = writeln!(
+        w,
+        "/// The simulator's decoded counts `[right, left]` after the last step\n\
+         /// (sums of the per-step counts; the decoders' 20-bit counters wrap them)."
+    );
+    let _ = writeln!(w, "pub const SIM_COUNTS: [i64; 2] = [{right}, {left}];");
     let _ = writeln!(w, "/// The true pose `[x, y, theta]` after the last step.");
     let _ = writeln!(
         w,

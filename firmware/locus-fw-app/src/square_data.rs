@@ -45,6 +45,9 @@ pub static ARENA: [Segment<f32>; 4] = [
 
 /// The simulator's `f64` EKF estimate `[x, y, theta]` after the last step.
 pub const SIM_ESTIMATE: [f64; 3] = [0.84996830272247, 0.3799605912383562, 1.568806806066566];
+/// The simulator's decoded counts `[right, left]` after the last step
+/// (sums of the per-step counts; the decoders' 20-bit counters wrap them).
+pub const SIM_COUNTS: [i64; 2] = [6264, 5875];
 /// The true pose `[x, y, theta]` after the last step.
 pub const TRUTH: [f64; 3] = [0.8417733749071149, 0.3686308880011363, 1.600504515247255];
 

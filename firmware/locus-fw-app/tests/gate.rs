@@ -1,5 +1,6 @@
-//! The firmware's precomputed gate threshold is the filter's own gate
-//! (host-only checks; no emulation).
+//! Host-only checks of the firmware application (no emulation): the
+//! precomputed gate threshold is the filter's own gate, and the decoders count
+//! what the simulator's encoders counted.
 
 use locus_core::ChiSquareGate;
 use locus_fw_app::{Firmware, run, run_with, square_data::CONFIG};
@@ -30,4 +31,18 @@ fn a_nan_threshold_is_refused() {
     let mut cfg = CONFIG;
     cfg.gate_threshold = f32::NAN;
     assert!(Firmware::new(&cfg).is_err());
+}
+
+#[test]
+fn the_decoders_count_what_the_simulators_encoders_counted() {
+    let report = run().expect("run");
+    let wrap = |c: i64| u32::try_from(c.rem_euclid(1 << 20)).expect("20 bits");
+    assert_eq!(
+        report.counts,
+        [
+            wrap(locus_fw_app::square_data::SIM_COUNTS[0]),
+            wrap(locus_fw_app::square_data::SIM_COUNTS[1])
+        ]
+    );
+    assert_eq!(report.invalid_transitions, 0);
 }
