@@ -20,10 +20,12 @@
 //!    (right), `d2` (left) of paper 001 eq. 9.
 //! 2. [`Firmware::filter_step`]: EKF prediction with [`DiffDrive`] (paper
 //!    001 eq. 7-13, [`Firmware::predict`]); if the step has an IR reading
-//!    ([`Firmware::correct`]), data association on the predicted pose ([`associate_ir_wall`]) and, for an axis-aligned wall,
-//!    the correction with [`IrPairObservation`] (eq. 3-5, 17-20), Joseph
-//!    form, behind a 99 % chi-square gate on the NIS (threshold precomputed
-//!    on the host, see [`Config::gate_threshold`]).
+//!    ([`Firmware::correct`]), data association on the predicted pose
+//!    ([`Firmware::associate`], [`associate_ir_wall`]) and, for an
+//!    axis-aligned wall, the correction with [`IrPairObservation`]
+//!    (eq. 3-5, 17-20; [`Firmware::correct_wall`]), Joseph form, behind a
+//!    99 % chi-square gate on the NIS (threshold precomputed on the host,
+//!    see [`Config::gate_threshold`]).
 //! 3. [`Firmware::odometry_step`]: the odometry-only pose advanced by the
 //!    same wheel travels, midpoint heading, with the sine and cosine from the
 //!    paper's 16-bit, 16-iteration [`Cordic`] (paper 004 section 4.1).
@@ -37,7 +39,9 @@ pub mod square_data;
 
 use locus_core::nalgebra::{Matrix3, Vector3};
 use locus_core::{Belief, ChiSquareGate, CovarianceUpdate, Ekf};
-use locus_models::{DiffDrive, IrPair, IrPairObservation, WheelTravel, associate_ir_wall};
+use locus_models::{
+    AxisWall, DiffDrive, IrPair, IrPairObservation, WheelTravel, associate_ir_wall,
+};
 use locus_odometry::redundant::{Integration, Motion, Pose};
 use locus_odometry::{Cordic, Counter, QuadratureDecoder, Wheel, wrapping_diff};
 
@@ -353,28 +357,49 @@ impl Firmware {
         Ok(())
     }
 
-    /// Data association of the readings `[d_s1, d_s2]` (m) on the current
-    /// (predicted) pose ([`associate_ir_wall`]: the wall the sensing ray
-    /// hits within `association_range`) and, for an axis-aligned wall, the
-    /// EKF correction with [`IrPairObservation`] (paper 001 eq. 3-5,
-    /// 17-20; Joseph form), kept only if the NIS passes the gate.
+    /// Data association and correction of the readings `[d_s1, d_s2]` (m):
+    /// [`associate`](Self::associate), then, for an axis-aligned wall,
+    /// [`correct_wall`](Self::correct_wall).
+    ///
+    /// # Errors
+    /// [`Error::Filter`] if the filter rejects the measurement (the belief
+    /// is unchanged).
+    pub fn correct(&mut self, readings: [f32; 2]) -> Result<(), Error> {
+        match self.associate() {
+            Some(wall) => self.correct_wall(wall, readings),
+            None => Ok(()),
+        }
+    }
+
+    /// Data association on the current (predicted) pose
+    /// ([`associate_ir_wall`], paper 001): the axis-aligned wall the IR
+    /// pair's sensing ray hits within `association_range`, or `None` (the
+    /// reading is then dropped and counted as unassociated).
+    #[inline(never)]
+    pub fn associate(&mut self) -> Option<AxisWall<f32>> {
+        let wall = associate_ir_wall(
+            &self.belief.x,
+            &self.pair,
+            &square_data::ARENA,
+            self.association_range,
+        );
+        if wall.is_none() {
+            self.unassociated += 1;
+        }
+        wall
+    }
+
+    /// The EKF correction with the readings `[d_s1, d_s2]` (m) of `wall`:
+    /// [`IrPairObservation`] (paper 001 eq. 3-5 for `z`, eq. 17-20 for `H`
+    /// and `V R V^T`), `S = H P H^T + V R V^T`, `G = P H^T S^-1`, Joseph form;
+    /// kept only if the NIS passes the gate.
     ///
     /// # Errors
     /// [`Error::Filter`] if the filter rejects the measurement (the belief
     /// is unchanged).
     #[inline(never)]
-    pub fn correct(&mut self, [ds1, ds2]: [f32; 2]) -> Result<(), Error> {
+    pub fn correct_wall(&mut self, wall: AxisWall<f32>, [ds1, ds2]: [f32; 2]) -> Result<(), Error> {
         let step = self.steps;
-        let prior = self.belief;
-        let Some(wall) = associate_ir_wall(
-            &prior.x,
-            &self.pair,
-            &square_data::ARENA,
-            self.association_range,
-        ) else {
-            self.unassociated += 1;
-            return Ok(());
-        };
         let obs = IrPairObservation {
             pair: self.pair,
             wall,
@@ -385,7 +410,7 @@ impl Firmware {
         };
         let c = self
             .ekf
-            .correct(&prior, &obs, &obs.z())
+            .correct(&self.belief, &obs, &obs.z())
             .map_err(|error| Error::Filter { step, error })?;
         // `<=` as `ChiSquareGate::accepts` (false for NaN).
         if c.applied && c.nis <= self.gate_threshold {

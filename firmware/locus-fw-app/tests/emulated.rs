@@ -261,8 +261,13 @@ fn instructions_per_step_under_icount() {
             Some(max("ticks_predict_max")),
         ),
         (
-            "IR association + EKF correction (steps with IR)",
-            per("ticks_correct", ir_steps),
+            "IR data association (steps with IR readings)",
+            per("ticks_associate", ir_steps),
+            Some(max("ticks_associate_max")),
+        ),
+        (
+            "EKF correction, IR pair (associated readings)",
+            per("ticks_correct", fw.u64("steps_associated")),
             Some(max("ticks_correct_max")),
         ),
         ("CORDIC odometry pose", per("ticks_odometry", steps), None),

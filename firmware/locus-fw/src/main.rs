@@ -45,6 +45,9 @@ struct Ticks {
     decode: u32,
     predict: u32,
     predict_max: u32,
+    associate: u32,
+    associate_max: u32,
+    readings: u32,
     correct: u32,
     correct_max: u32,
     corrections: u32,
@@ -156,28 +159,39 @@ fn main() -> ! {
             fail(&e);
         }
         let t2 = now();
-        if let Some(readings) = ir {
-            if let Err(e) = fw.correct(*readings) {
+        let mut wall = None;
+        if ir.is_some() {
+            wall = fw.associate();
+        }
+        let t3 = now();
+        if let (Some(wall), Some(readings)) = (wall, ir) {
+            if let Err(e) = fw.correct_wall(wall, *readings) {
                 fail(&e);
             }
         }
-        let t3 = now();
-        fw.odometry_step(&u);
         let t4 = now();
-        fw.finish_step();
+        fw.odometry_step(&u);
         let t5 = now();
+        fw.finish_step();
+        let t6 = now();
         ticks.decode += elapsed(t0, t1);
         let predict = elapsed(t1, t2);
         ticks.predict += predict;
         ticks.predict_max = ticks.predict_max.max(predict);
         if ir.is_some() {
-            let correct = elapsed(t2, t3);
+            let associate = elapsed(t2, t3);
+            ticks.associate += associate;
+            ticks.associate_max = ticks.associate_max.max(associate);
+            ticks.readings += 1;
+        }
+        if wall.is_some() {
+            let correct = elapsed(t3, t4);
             ticks.correct += correct;
             ticks.correct_max = ticks.correct_max.max(correct);
             ticks.corrections += 1;
         }
-        ticks.odometry += elapsed(t3, t4);
-        ticks.checksum += elapsed(t4, t5);
+        ticks.odometry += elapsed(t4, t5);
+        ticks.checksum += elapsed(t5, t6);
     }
     let report = fw.report();
     let lowest = lowest_used(painted_bottom);
@@ -200,9 +214,12 @@ fn main() -> ! {
     hprintln!("ticks_decode {}", ticks.decode);
     hprintln!("ticks_predict {}", ticks.predict);
     hprintln!("ticks_predict_max {}", ticks.predict_max);
+    hprintln!("ticks_associate {}", ticks.associate);
+    hprintln!("ticks_associate_max {}", ticks.associate_max);
+    hprintln!("steps_with_ir {}", ticks.readings);
     hprintln!("ticks_correct {}", ticks.correct);
     hprintln!("ticks_correct_max {}", ticks.correct_max);
-    hprintln!("steps_with_ir {}", ticks.corrections);
+    hprintln!("steps_associated {}", ticks.corrections);
     hprintln!("ticks_odometry {}", ticks.odometry);
     hprintln!("ticks_checksum {}", ticks.checksum);
     hprintln!("done");
