@@ -57,10 +57,11 @@ cargo test --workspace --locked
 step "benchmarks compile"
 cargo bench --workspace --locked --no-run
 
-step "firmware: format, clippy (thumbv7em-none-eabihf and host)"
+step "firmware: format, clippy (thumbv7em-none-eabihf and host), docs"
 (cd firmware && cargo fmt --all -- --check)
 (cd firmware && cargo clippy --locked --release -p locus-fw -p locus-fw-app -- -D warnings)
 (cd firmware && cargo clippy --locked --target "$HOST_TRIPLE" -p locus-fw-app --all-targets -- -D warnings)
+(cd firmware && RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --locked)
 
 step "firmware: under QEMU mps2-an386, bit-identical to the host f32 run; footprint; instructions per step"
 (cd firmware && cargo test --locked --target "$HOST_TRIPLE" -p locus-fw-app -- --nocapture)
