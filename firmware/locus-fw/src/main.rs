@@ -50,7 +50,7 @@ struct Ticks {
     readings: u32,
     correct: u32,
     correct_max: u32,
-    corrections: u32,
+    associated: u32,
     odometry: u32,
     checksum: u32,
 }
@@ -188,7 +188,7 @@ fn main() -> ! {
             let correct = elapsed(t3, t4);
             ticks.correct += correct;
             ticks.correct_max = ticks.correct_max.max(correct);
-            ticks.corrections += 1;
+            ticks.associated += 1;
         }
         ticks.odometry += elapsed(t4, t5);
         ticks.checksum += elapsed(t5, t6);
@@ -219,7 +219,7 @@ fn main() -> ! {
     hprintln!("steps_with_ir {}", ticks.readings);
     hprintln!("ticks_correct {}", ticks.correct);
     hprintln!("ticks_correct_max {}", ticks.correct_max);
-    hprintln!("steps_associated {}", ticks.corrections);
+    hprintln!("steps_associated {}", ticks.associated);
     hprintln!("ticks_odometry {}", ticks.odometry);
     hprintln!("ticks_checksum {}", ticks.checksum);
     hprintln!("done");
