@@ -379,6 +379,7 @@ fn classify(name: &str) -> Part {
         || starts("core::num::bignum")
         || starts("core::num::fmt")
         || bare.contains("as core::fmt::")
+        || bare.contains("core..fmt..")
         || starts("core::num::bignum")
     {
         return Part::Excluded("formatting (core::fmt, float printing)");
@@ -387,6 +388,7 @@ fn classify(name: &str) -> Part {
         return Part::Excluded("semihosting");
     }
     if starts("core::panicking")
+        || starts("__rustc::rust_begin_unwind")
         || starts("core::slice::index")
         || starts("core::option::")
         || starts("core::result::unwrap_failed")
