@@ -554,6 +554,13 @@ fn footprint_of_the_filter_models_decoder_and_cordic() {
          (Firmware state {} bytes, inside the stack figure) of a {RAM_BUDGET}-byte budget",
         fw.u64("firmware_state_bytes")
     );
+    let unclassified = parts
+        .get(&Part::Excluded("other"))
+        .map_or(0, |(size, _)| *size);
+    assert_eq!(
+        unclassified, 0,
+        "sized symbols the footprint does not classify: extend `classify`"
+    );
     assert!(
         flash > 4096,
         "implausibly small flash figure {flash}: classification broken?"
