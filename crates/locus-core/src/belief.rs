@@ -77,8 +77,9 @@ pub(crate) fn all_finite<T: Scalar>(values: &[T]) -> bool {
 /// The operations saved matter more than their number suggests: in
 /// `predict` this check waits for the last entry of `P-`, and each waiting
 /// operation holds a scheduler entry, so fewer of them let the correction's
-/// independent work (its measurement noise) start earlier (measured: the f32
-/// step of the `ekf_step` bench went from 1.13x to 1.00x plain nalgebra).
+/// independent work (its measurement noise) start earlier (measured on the
+/// f32 step of the `ekf_step` bench: from 1.13x to 1.00x plain nalgebra in
+/// a probe binary, from 1.26x to 1.10x in the bench binary).
 /// The lanes run on across the two slices, so that a belief (`x` then `P`,
 /// adjacent in memory) is summed as whole vectors.
 #[inline(always)]
