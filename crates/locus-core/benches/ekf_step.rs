@@ -27,6 +27,13 @@
 //! correction (Table 3). The directory is `$CRITERION_HOME`, else
 //! `$CARGO_TARGET_DIR/criterion`, else `<target>/criterion` next to this binary.
 //!
+//! Then two interleaved tables of the step variants (round robin, fastest
+//! batch of each; see `print_interleaved`): independent steps (throughput)
+//! and chained steps (each step starts from the previous posterior: the
+//! latency a filter sees). `scripts/bench_instructions.sh` counts the
+//! instructions per step of the same variants under callgrind
+//! (`EKF_STEP_RUN=<variant>:<n>[:chained]` runs one variant and exits).
+//!
 //! Note: timings of generic code depend on LLVM's inlining decisions, which
 //! depend on how many instances share a nalgebra operator in the binary;
 //! compare variants within one run.
@@ -166,10 +173,14 @@ fn closed_correct<T: Scalar>(
 ) -> Belief<T, 3> {
     let half = cast::<T>(0.5);
     // V R V^T (eq. 18-20 with the offsets), R = diag(r11, r22).
+    // sin and cos of ObsAng = atan(diff / l) without the angle, as the model
+    // computes them.
     let l = o.pair.spacing;
     let diff = o.ds1 - o.ds2;
-    let kk = l / (l * l + diff * diff);
-    let (sa, ca) = (diff / l).atan().sin_cos();
+    let den = l * l + diff * diff;
+    let kk = l / den;
+    let inv_hyp = T::one() / den.sqrt();
+    let (sa, ca) = (diff * inv_hyp, l * inv_hyp);
     let a = ca * half;
     let b = -(o.ds1 + o.ds2) * half * sa * kk;
     let g = -(o.pair.lateral_offset * sa + o.pair.forward_offset * ca) * kk;
@@ -753,6 +764,12 @@ const CORRECT_IDS: &[&str] = &[
 ];
 
 fn main() {
+    // Instruction counting (scripts/bench_instructions.sh): run one variant
+    // `n` times and exit, without criterion.
+    if let Ok(spec) = std::env::var("EKF_STEP_RUN") {
+        run_one(&spec);
+        return;
+    }
     check_agreement();
     // Truncate to whole seconds: some filesystems store coarse mtimes.
     let started = SystemTime::now() - Duration::from_secs(1);
@@ -767,97 +784,142 @@ fn main() {
     print_interleaved();
 }
 
-/// Ratios that survive a busy machine: the step variants timed in short
-/// batches taken in turn (round robin, 400 rounds of 2000 calls), keeping
-/// each variant's fastest batch. Criterion times one variant after another,
-/// so load that comes and goes shifts its ratios; here every variant sees
-/// the same conditions.
-fn print_interleaved() {
-    const ROUNDS: usize = 400;
-    const BATCH: u32 = 2000;
-    let i64_ = inputs::<f64>();
-    let i32_ = inputs::<f32>();
-    let plain = Ekf::<f64>::new(CovarianceUpdate::Plain);
-    let joseph = Ekf::<f64>::new(CovarianceUpdate::Joseph);
-    let plain32 = Ekf::<f32>::new(CovarianceUpdate::Plain);
-    let joseph32 = Ekf::<f32>::new(CovarianceUpdate::Joseph);
-    type Variant<'a> = (&'a str, Box<dyn Fn() + 'a>);
-    let variants: Vec<Variant> = vec![
-        (
-            "closed_f64",
-            Box::new(|| {
-                black_box(closed_step(black_box(&i64_)));
-            }),
-        ),
-        (
-            "nalgebra_f64",
-            Box::new(|| {
-                black_box(nalgebra_step(black_box(&i64_)));
-            }),
-        ),
+/// One step variant, run `n` times in one of two ways:
+/// * independent steps (throughput): every step starts from the same inputs,
+///   so consecutive steps may overlap in the processor;
+/// * chained steps (latency): step k+1 starts from step k's posterior, as a
+///   filter runs, so each step waits for the previous one.
+type Batch<'a> = Box<dyn Fn(u32, bool) + 'a>;
+
+/// A batch runner for a step function `f(&Inputs<T>) -> Belief<T, 3>`.
+fn batch<'a, T: Scalar>(
+    inp: &'a Inputs<T>,
+    f: impl Fn(&Inputs<T>) -> Belief<T, 3> + 'a,
+) -> Batch<'a> {
+    Box::new(move |n, chained| {
+        if chained {
+            let mut i = *inp;
+            for _ in 0..n {
+                i.belief = f(black_box(&i));
+            }
+            black_box(i);
+        } else {
+            for _ in 0..n {
+                black_box(f(black_box(inp)));
+            }
+        }
+    })
+}
+
+/// The step variants of the interleaved tables (and of the instruction
+/// counts), by name.
+fn step_variants<'a>(
+    i64_: &'a Inputs<f64>,
+    i32_: &'a Inputs<f32>,
+    ekf: &'a [Ekf<f64>; 2],
+    ekf32: &'a [Ekf<f32>; 2],
+) -> Vec<(&'static str, Batch<'a>)> {
+    let [plain, joseph] = ekf;
+    let [plain32, joseph32] = ekf32;
+    vec![
+        ("closed_f64", batch(i64_, closed_step)),
+        ("nalgebra_f64", batch(i64_, nalgebra_step)),
         (
             "locus_plain_f64",
-            Box::new(|| {
-                black_box(locus_step(black_box(&plain), black_box(&i64_)));
-            }),
+            batch(i64_, move |i| locus_step(black_box(plain), i)),
         ),
         (
             "locus_joseph_f64",
-            Box::new(|| {
-                black_box(locus_step(black_box(&joseph), black_box(&i64_)));
-            }),
+            batch(i64_, move |i| locus_step(black_box(joseph), i)),
         ),
-        (
-            "closed_f32",
-            Box::new(|| {
-                black_box(closed_step(black_box(&i32_)));
-            }),
-        ),
-        (
-            "nalgebra_f32",
-            Box::new(|| {
-                black_box(nalgebra_step(black_box(&i32_)));
-            }),
-        ),
+        ("closed_f32", batch(i32_, closed_step)),
+        ("nalgebra_f32", batch(i32_, nalgebra_step)),
         (
             "locus_plain_f32",
-            Box::new(|| {
-                black_box(locus_step(black_box(&plain32), black_box(&i32_)));
-            }),
+            batch(i32_, move |i| locus_step(black_box(plain32), i)),
         ),
         (
             "locus_joseph_f32",
-            Box::new(|| {
-                black_box(locus_step(black_box(&joseph32), black_box(&i32_)));
-            }),
+            batch(i32_, move |i| locus_step(black_box(joseph32), i)),
         ),
-    ];
-    let mut best = vec![f64::INFINITY; variants.len()];
+    ]
+}
+
+/// `EKF_STEP_RUN=<variant>:<n>[:chained]`: runs one variant `n` times (for
+/// `valgrind --tool=callgrind`; see scripts/bench_instructions.sh).
+fn run_one(spec: &str) {
+    let mut parts = spec.split(':');
+    let name = parts.next().unwrap_or_default();
+    let n: u32 = parts
+        .next()
+        .and_then(|n| n.parse().ok())
+        .expect("EKF_STEP_RUN=<variant>:<n>[:chained]");
+    let chained = parts.next() == Some("chained");
+    let (i64_, i32_) = (inputs::<f64>(), inputs::<f32>());
+    let ekf = [CovarianceUpdate::Plain, CovarianceUpdate::Joseph].map(Ekf::<f64>::new);
+    let ekf32 = [CovarianceUpdate::Plain, CovarianceUpdate::Joseph].map(Ekf::<f32>::new);
+    let variants = step_variants(&i64_, &i32_, &ekf, &ekf32);
+    let Some((_, run)) = variants.iter().find(|(id, _)| *id == name) else {
+        let names: Vec<&str> = variants.iter().map(|(id, _)| *id).collect();
+        panic!("unknown variant {name:?}; one of {names:?}");
+    };
+    run(n, chained);
+}
+
+/// Ratios that survive a busy machine: the step variants timed in short
+/// batches taken in turn (round robin, 400 rounds of 2000 steps), keeping
+/// each variant's fastest batch. Criterion times one variant after another,
+/// so load that comes and goes shifts its ratios; here every variant sees
+/// the same conditions. Two tables: independent steps (throughput: every
+/// step starts from the same inputs) and chained steps (latency: each step
+/// starts from the previous posterior, as a filter runs).
+fn print_interleaved() {
+    const ROUNDS: usize = 400;
+    const BATCH: u32 = 2000;
+    let (i64_, i32_) = (inputs::<f64>(), inputs::<f32>());
+    let ekf = [CovarianceUpdate::Plain, CovarianceUpdate::Joseph].map(Ekf::<f64>::new);
+    let ekf32 = [CovarianceUpdate::Plain, CovarianceUpdate::Joseph].map(Ekf::<f32>::new);
+    let variants = step_variants(&i64_, &i32_, &ekf, &ekf32);
+    // best[k][0]: independent, best[k][1]: chained (ns per step).
+    let mut best = vec![[f64::INFINITY; 2]; variants.len()];
     for _ in 0..ROUNDS {
-        for (k, (_, run)) in variants.iter().enumerate() {
-            let t = std::time::Instant::now();
-            for _ in 0..BATCH {
-                run();
+        for chained in [false, true] {
+            for (k, (_, run)) in variants.iter().enumerate() {
+                let t = std::time::Instant::now();
+                run(BATCH, chained);
+                let ns = t.elapsed().as_secs_f64() * 1e9 / f64::from(BATCH);
+                let b = &mut best[k][usize::from(chained)];
+                *b = b.min(ns);
             }
-            best[k] = best[k].min(t.elapsed().as_secs_f64() * 1e9 / f64::from(BATCH));
         }
     }
+    let index = |name: &str| variants.iter().position(|(id, _)| *id == name);
     println!();
+    println!("Interleaved (round robin, fastest of {ROUNDS} batches of {BATCH} steps each):");
+    println!("  independent: every step from the same inputs (throughput);");
+    println!("  chained: each step from the previous posterior (latency, as a filter runs).");
     println!(
-        "Interleaved (round robin, fastest of {ROUNDS} batches of {BATCH} calls; includes one dynamic call per step):"
-    );
-    println!(
-        "{:<20} {:>8} {:>9} {:>10}",
-        "step/", "ns", "x closed", "x nalgebra"
+        "{:<20} {:>11} {:>9} {:>10}   {:>8} {:>9} {:>10}",
+        "step/", "indep. ns", "x closed", "x nalgebra", "chain ns", "x closed", "x nalgebra"
     );
     for (k, (name, _)) in variants.iter().enumerate() {
-        let base = if name.ends_with("f64") { 0 } else { 4 };
+        let prec = if name.ends_with("f64") { "f64" } else { "f32" };
+        let closed = index(&format!("closed_{prec}"));
+        let nalgebra = index(&format!("nalgebra_{prec}"));
+        let ratio = |m: usize, r: Option<usize>| {
+            r.map_or("-".to_string(), |r| {
+                format!("{:.2}", best[k][m] / best[r][m])
+            })
+        };
         println!(
-            "{:<20} {:>8.1} {:>9.2} {:>10.2}",
+            "{:<20} {:>11.1} {:>9} {:>10}   {:>8.1} {:>9} {:>10}",
             name,
-            best[k],
-            best[k] / best[base],
-            best[k] / best[base + 1]
+            best[k][0],
+            ratio(0, closed),
+            ratio(0, nalgebra),
+            best[k][1],
+            ratio(1, closed),
+            ratio(1, nalgebra)
         );
     }
 }

@@ -66,22 +66,34 @@ pub(crate) fn all_finite<T: Scalar>(values: &[T]) -> bool {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) == zero
 }
 
-/// [`all_finite`] of two slices with one comparison and no branch between
-/// them (the filter checks a state and its covariance together).
+/// [`all_finite`] of two slices (the filter checks a state and its
+/// covariance together), exactly, with about half its operations on the
+/// usual path: the plain sum of the values is NaN or infinite if any value
+/// is (`inf + x = inf`; `inf - inf` and `NaN + x` are NaN), so a finite sum
+/// proves every value finite. Finite values can overflow the sum (magnitudes
+/// near the largest float); only then, on a branch that is otherwise never
+/// taken, is each value checked with [`all_finite`].
+///
+/// The operations saved matter more than their number suggests: in
+/// `predict` this check waits for the last entry of `P-`, and each waiting
+/// operation holds a scheduler entry, so fewer of them let the correction's
+/// independent work (its measurement noise) start earlier (measured on the
+/// f32 step of the `ekf_step` bench: from 1.13x to 1.00x plain nalgebra in
+/// a probe binary, from 1.26x to 1.10x in the bench binary).
+/// The lanes run on across the two slices, so that a belief (`x` then `P`,
+/// adjacent in memory) is summed as whole vectors.
 #[inline(always)]
 pub(crate) fn all_finite_pair<T: Scalar>(a: &[T], b: &[T]) -> bool {
-    nonfinite_marker(a) + nonfinite_marker(b) == T::zero()
-}
-
-/// Zero if every value is finite, NaN otherwise (see [`all_finite`]).
-#[inline(always)]
-fn nonfinite_marker<T: Scalar>(values: &[T]) -> T {
     let zero = T::zero();
     let mut acc = [zero; 4];
-    for (i, v) in values.iter().enumerate() {
-        acc[i % 4] += *v * zero;
+    for (i, v) in a.iter().enumerate() {
+        acc[i % 4] += *v;
     }
-    (acc[0] + acc[1]) + (acc[2] + acc[3])
+    let n = a.len();
+    for (i, v) in b.iter().enumerate() {
+        acc[(n + i) % 4] += *v;
+    }
+    finite((acc[0] + acc[1]) + (acc[2] + acc[3])) || (all_finite(a) && all_finite(b))
 }
 
 /// True if `v` is finite, with floating-point operations only (`v * 0` is
@@ -91,4 +103,25 @@ fn nonfinite_marker<T: Scalar>(values: &[T]) -> T {
 #[inline(always)]
 pub(crate) fn finite<T: Scalar>(v: T) -> bool {
     v * T::zero() == T::zero()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn all_finite_pair_is_exact_when_the_sum_overflows() {
+        let big = [f64::MAX, f64::MAX, 1.0];
+        // The sum overflows, every value is finite: the exact path answers.
+        assert!(all_finite_pair(&big, &[f64::MAX]));
+        assert!(all_finite_pair(&[f32::MAX, f32::MAX], &[-f32::MAX, 1.0]));
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            assert!(!all_finite_pair(&[1.0, bad, 2.0], &[3.0; 9]));
+            assert!(!all_finite_pair(&[1.0; 3], &[3.0, 4.0, bad]));
+            assert!(!all_finite_pair(&big, &[bad]));
+        }
+        // inf - inf in the sum is NaN, not finite.
+        assert!(!all_finite_pair(&[f64::INFINITY], &[f64::NEG_INFINITY]));
+        assert!(all_finite_pair(&[0.0, -0.0, 1e-310], &[-1e300; 9]));
+    }
 }
