@@ -697,8 +697,9 @@ impl LiveParams {
 
 /// The details of one EKF correction, for showing it step by step: the
 /// prediction it starts from, the linearisation, the gain, the innovation,
-/// the gate's decision and the belief after it. Matrices are row-major.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// the gate's decision and the belief after it. Matrices are row-major
+/// (serialised as nested arrays).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct CorrectionDetail {
     /// The belief before the step's prediction: `x` (m, m, rad).
     pub x_before_predict: [f64; 3],
