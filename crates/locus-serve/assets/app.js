@@ -11,6 +11,8 @@ const locus = {
   connected: false, hello: null, params: null, state: null, frames: 0,
   samples: 0, teleopFrames: 0, errors: [], lastCsv: null, ellipse: null,
   lastCorrection: null, charts: {},
+  // Every NIS received since the page loaded, with its time: {t, nis}.
+  nisLog: [],
 };
 window.locus = locus;
 
@@ -46,6 +48,7 @@ function gateThreshold(c) { return c > 0 && c < 1 ? -2 * Math.log(1 - c) : null;
 
 // ---- Charts (uPlot) -----------------------------------------------------------
 function chartWidth() { return Math.max(380, $('chart-p').clientWidth - 2); }
+const expTicks = (u, splits) => splits.map((v) => (v === null ? '' : v.toExponential(0)));
 function makeChart(id, title, series, scales, axes) {
   const opts = {
     title, width: chartWidth(), height: 150,
@@ -68,7 +71,7 @@ function initCharts() {
      { label: 'P_y [m²]', stroke: '#9467bd', scale: 'm2' },
      { label: 'P_θ [rad²]', stroke: '#f0a202', scale: 'rad2' }],
     { m2: logm, rad2: logm },
-    [{ scale: 'm2', size: 60 }, { scale: 'rad2', side: 1, size: 60, grid: { show: false } }]);
+    [{ scale: 'm2', size: 60, values: expTicks }, { scale: 'rad2', side: 1, size: 60, grid: { show: false }, values: expTicks }]);
   charts.innov = makeChart('chart-innov', 'Innovation z − h(x⁻): distance [m] (left), heading [rad] (right)',
     [{ label: 'distance [m]', stroke: '#0b6e99', scale: 'm', points: { show: true, size: 3 }, paths: () => null },
      { label: 'heading [rad]', stroke: '#d62728', scale: 'rad', points: { show: true, size: 3 }, paths: () => null }],
@@ -76,7 +79,7 @@ function initCharts() {
   charts.nis = makeChart('chart-nis', 'NIS (2 dof) and the gate threshold',
     [{ label: 'NIS', stroke: '#1b2a41', points: { show: true, size: 3 }, paths: () => null },
      { label: 'gate', stroke: '#b00020', dash: [6, 4], width: 1.5 }],
-    { y: { distr: 3 } }, [{ size: 50 }]);
+    { y: { distr: 3 } }, [{ size: 50, values: expTicks }]);
   charts.wheels = makeChart('chart-wheels', 'Wheel speeds V1 (right), V2 (left) [m/s]',
     [{ label: 'V1 [m/s]', stroke: '#0b6e99' }, { label: 'V2 [m/s]', stroke: '#f0a202' }], {}, [{ size: 50 }]);
   charts.ir = makeChart('chart-ir', 'IR distances d_s1, d_s2 [m]',
@@ -168,8 +171,8 @@ function drawArena() {
   drawEllipse(ctx, sx(last.ekf[0]), sy(last.ekf[1]), e, scale() * mag, '#f0a202', '#f0a20233');
   locus.ellipse = { rx_m: e.rx, ry_m: e.ry, angle: e.angle, k: e.k, p: ellipseProb(), mag, rx_px: e.rx * scale() * mag, ry_px: e.ry * scale() * mag };
   ctx.fillStyle = '#1b2a41'; ctx.font = '12px system-ui';
-  ctx.fillText(ellipseLabel(), 10, arena.height - 10);
-  if (s && s.teleop) { ctx.fillStyle = '#b00020'; ctx.fillText('keyboard driving', 10, 18); }
+  ctx.fillText(ellipseLabel(), 10, 16);
+  if (s && s.teleop) { ctx.fillStyle = '#b00020'; ctx.fillText('keyboard driving', 10, 32); }
 }
 
 // ---- Step-through view of one correction ----------------------------------------
@@ -308,6 +311,7 @@ const handlers = {
       push('s1', s.ir ? s.ir[0] : null); push('s2', s.ir ? s.ir[1] : null);
       push('truth', s.truth, PATH_MAX); push('est', s.ekf, PATH_MAX); push('odo', s.odo, PATH_MAX);
       locus.lastSample = s; locus.samples++;
+      if (s.nis !== null) { locus.nisLog.push({ t: s.t, nis: s.nis }); if (locus.nisLog.length > 20000) locus.nisLog.shift(); }
     }
     if (m.correction) showCorrection(m.correction);
     if (m.figure && $('figure-live')) {
