@@ -325,6 +325,7 @@ const handlers = {
   error(m) { showError(m.field, m.message); },
   csv(m) {
     locus.lastCsv = { filename: m.filename, rows: m.csv.split('\n').length - 2, truncated: m.truncated };
+    if (m.truncated) showError('export', 'the log was cut at its size limit: the file holds the first 30 000 steps');
     const blob = new Blob([m.csv], { type: 'text/csv' });
     const a = document.createElement('a');
     a.href = URL.createObjectURL(blob); a.download = m.filename;

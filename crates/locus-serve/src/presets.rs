@@ -199,10 +199,17 @@ pub struct LiveFigure {
 }
 
 /// Step `step`'s figure for `now`, with the figures of the steps already
-/// run in the session (`others[i]` for step `'a' + i`).
+/// run in the session (`others[i]` for step `'a' + i`); `finished`: the
+/// run has ended (step a's criterion is about the end of the run, so its
+/// verdict waits for it).
 #[must_use]
 #[allow(clippy::too_many_lines)]
-pub fn live_figure(step: char, now: &RunFigures, others: &[Option<RunFigures>; 6]) -> LiveFigure {
+pub fn live_figure(
+    step: char,
+    now: &RunFigures,
+    others: &[Option<RunFigures>; 6],
+    finished: bool,
+) -> LiveFigure {
     let cm = |v: f64| 100.0 * v;
     let other = |c: char| {
         let i = (c as usize).wrapping_sub('a' as usize);
@@ -218,10 +225,19 @@ pub fn live_figure(step: char, now: &RunFigures, others: &[Option<RunFigures>; 6
                 let growth = now.trace / t1;
                 (
                     format!(
-                        "det P fell at {} steps; trace(P_xy) now {growth:.1}x its value after side 1",
-                        now.det_decreases
+                        "det P fell at {} steps; trace(P_xy) now {growth:.1}x its value after side 1{}",
+                        now.det_decreases,
+                        if finished {
+                            " (end of run)"
+                        } else {
+                            " (judged at the end)"
+                        }
                     ),
-                    Some(now.det_decreases == 0 && growth > 10.0),
+                    if now.det_decreases > 0 {
+                        Some(false)
+                    } else {
+                        finished.then_some(growth > 10.0)
+                    },
                 )
             }
             None => (
@@ -356,13 +372,16 @@ mod tests {
         let cfg = config('a', &SquareConfig::default()).unwrap();
         let mut sim = locus_sim::SquareSim::new(&cfg, 1).unwrap();
         let mut fig = RunFigures::default();
-        for _ in 0..6000 {
-            let Some(s) = sim.step(None).unwrap() else {
-                break;
-            };
+        let mut pending = None;
+        while let Some(s) = sim.step(None).unwrap() {
             fig.push(&s.record, &cfg);
+            if s.record.step == 6000 {
+                pending = Some(live_figure('a', &fig, &[None; 6], false));
+            }
         }
-        let live = live_figure('a', &fig, &[None; 6]);
+        let pending = pending.unwrap();
+        assert_eq!(pending.ok, None, "judged at the end: {}", pending.measured);
+        let live = live_figure('a', &fig, &[None; 6], true);
         assert_eq!(live.ok, Some(true), "{}", live.measured);
     }
 }

@@ -23,9 +23,10 @@ pub const SCENARIOS: [&str; 2] = ["square", "square-ideal"];
 /// page repeats it while a key is held), like the robot's watchdog.
 pub const TELEOP_TIMEOUT: Duration = Duration::from_millis(500);
 
-/// Most steps kept in the exported log (10 min at 100 Hz); later steps
+/// Most steps kept in the exported log (5 min at 100 Hz, about 8 MB: the
+/// memory bound of a session; a default two-lap run is 14 107); later steps
 /// still run and plot, the export says it was cut.
-pub const MAX_LOG_STEPS: usize = 60_000;
+pub const MAX_LOG_STEPS: usize = 30_000;
 
 /// Most simulated time searched by `step_correction` (s).
 const STEP_CORRECTION_MAX_TIME: f64 = 10.0;
@@ -471,9 +472,9 @@ impl Session {
     /// The state frame: run state and the samples since the last frame
     /// (taken: the next frame holds only later samples).
     pub fn frame(&mut self) -> ServerMsg {
-        let figure = self
-            .preset
-            .map(|p| presets::live_figure(p, &self.figures, &self.guide_runs));
+        let figure = self.preset.map(|p| {
+            presets::live_figure(p, &self.figures, &self.guide_runs, self.sim.is_finished())
+        });
         ServerMsg::State {
             running: self.running,
             finished: self.sim.is_finished(),

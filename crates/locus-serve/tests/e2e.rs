@@ -18,6 +18,7 @@
 
 mod support;
 
+use std::os::unix::process::CommandExt as _;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -33,7 +34,13 @@ struct Driver {
 }
 
 impl Drop for Driver {
+    /// Ends chromedriver and the browser it started, also when the test
+    /// failed before closing the session: both are in the process group
+    /// chromedriver leads (its own, see `start_driver`).
     fn drop(&mut self) {
+        let _ = Command::new("kill")
+            .args(["-KILL", "--", &format!("-{}", self.child.id())])
+            .status();
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
@@ -61,6 +68,7 @@ fn start_driver() -> Driver {
         .port();
     let child = Command::new(&driver)
         .arg(format!("--port={port}"))
+        .process_group(0)
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
@@ -168,7 +176,14 @@ async fn teaching_ui_in_headless_chromium() {
     let driver = start_driver();
     let downloads = std::env::temp_dir().join(format!("locus-e2e-{}", std::process::id()));
     std::fs::create_dir_all(&downloads).expect("download dir");
-    let addr = support::start_server(locus_serve::Config::default()).await;
+    // Five laps (350 s simulated), so the run is still going at the end of
+    // the test whatever the speed factors.
+    let scenario = locus_sim::SquareConfig {
+        laps: 5,
+        ..locus_sim::SquareConfig::default()
+    };
+    let config = locus_serve::Config::new("square", scenario).expect("config");
+    let addr = support::start_server(config).await;
     let c = browser(&driver, &downloads).await;
     let long = Duration::from_secs(30);
 
@@ -312,6 +327,11 @@ async fn teaching_ui_in_headless_chromium() {
     )
     .await;
     click(&c, "arena").await;
+    assert_eq!(
+        js(&c, "locus.state.running").await,
+        json!(true),
+        "still running"
+    );
     let theta0 = num(&c, "locus.lastSample.truth[2]").await;
     let teleop0 = num(&c, "locus.teleopFrames").await;
     let keys = KeyActions::new("keyboard".to_string())
