@@ -226,7 +226,7 @@ const LIVE = [
   ['r11', 'R11 var(e_ds1) [m²]'], ['r22', 'R22 var(e_ds2) [m²]'],
   ['ir_sigma', 'injected IR noise σ [m]'], ['gate', 'gate confidence (0 = none)'],
   ['v_ref', 'V_ref [m/s]'], ['w_ref', 'W_ref [rad/s]'],
-  ['k_cross', 'k_cross [rad/m]'], ['k_heading', 'k_heading [1/s]'],
+  ['k_cross', 'k_cross [rad/m]'], ['k_heading', 'k_heading [1/s]'], ['k_pos', 'k_pos [1/s]'],
 ];
 const INITIAL = [
   ['start_x', 'x₀ [m]'], ['start_y', 'y₀ [m]'], ['start_theta', 'θ₀ [rad]'],

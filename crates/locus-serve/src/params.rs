@@ -44,7 +44,7 @@ pub struct Limit {
 /// Every numeric field the page can set, with its range. Wide enough for
 /// the guide's extremes (`Q` of 1e-14 in step d, `Q22` of 1e4 in step e),
 /// narrow enough to keep the simulation meaningful.
-pub const LIMITS: [Limit; 19] = [
+pub const LIMITS: [Limit; 20] = [
     Limit {
         field: "q11",
         min: 1e-16,
@@ -103,6 +103,12 @@ pub const LIMITS: [Limit; 19] = [
         field: "k_heading",
         min: 0.01,
         max: 50.0,
+        unit: "1/s",
+    },
+    Limit {
+        field: "k_pos",
+        min: 0.01,
+        max: 20.0,
         unit: "1/s",
     },
     Limit {
@@ -280,6 +286,7 @@ mod tests {
             ("w_ref", c.w_ref),
             ("k_cross", c.k_cross),
             ("k_heading", c.k_heading),
+            ("k_pos", c.k_pos),
             ("start_x", cfg.start[0]),
             ("start_y", cfg.start[1]),
             ("start_theta", cfg.start[2]),

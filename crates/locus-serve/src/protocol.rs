@@ -47,7 +47,8 @@ pub enum ClientMsg {
     /// Live parameters; each field is optional, all or nothing is applied.
     Params {
         /// The fields: `q11`, `q22`, `r11`, `r22`, `ir_sigma`, `use_ir`,
-        /// `gate` (0: no gate), `v_ref`, `w_ref`, `k_cross`, `k_heading`;
+        /// `gate` (0: no gate), `v_ref`, `w_ref`, `k_cross`, `k_heading`,
+        /// `k_pos`;
         /// numbers or their text.
         values: serde_json::Map<String, Value>,
     },
@@ -137,6 +138,8 @@ pub struct ParamValues {
     pub k_cross: f64,
     /// Heading gain (1/s).
     pub k_heading: f64,
+    /// Position gain of the corner approach (1/s).
+    pub k_pos: f64,
     /// Initial pose x (m), at the next reset.
     pub start_x: f64,
     /// Initial pose y (m).

@@ -168,6 +168,7 @@ impl Session {
                 w_ref: c.control.w_ref,
                 k_cross: c.control.k_cross,
                 k_heading: c.control.k_heading,
+                k_pos: c.control.k_pos,
                 start_x: start.start[0],
                 start_y: start.start[1],
                 start_theta: start.start[2],
@@ -335,6 +336,7 @@ impl Session {
                 "w_ref" => live.control.w_ref = params::checked(key, value)?,
                 "k_cross" => live.control.k_cross = params::checked(key, value)?,
                 "k_heading" => live.control.k_heading = params::checked(key, value)?,
+                "k_pos" => live.control.k_pos = params::checked(key, value)?,
                 _ => return Err(Invalid::new(key, "is not a live parameter")),
             }
         }

@@ -176,10 +176,11 @@ async fn teaching_ui_in_headless_chromium() {
     let driver = start_driver();
     let downloads = std::env::temp_dir().join(format!("locus-e2e-{}", std::process::id()));
     std::fs::create_dir_all(&downloads).expect("download dir");
-    // Five laps (350 s simulated), so the run is still going at the end of
-    // the test whatever the speed factors.
+    // Twenty laps (about 1400 s simulated), so the run is still going at
+    // the end of the test whatever the speed factors and the machine's load.
     let scenario = locus_sim::SquareConfig {
-        laps: 5,
+        laps: 20,
+        max_time: 3000.0,
         ..locus_sim::SquareConfig::default()
     };
     let config = locus_serve::Config::new("square", scenario).expect("config");
