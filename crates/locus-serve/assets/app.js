@@ -170,7 +170,9 @@ function drawArena() {
   const mag = ellipseMag();
   drawEllipse(ctx, sx(last.ekf[0]), sy(last.ekf[1]), e, scale() * mag, '#f0a202', '#f0a20233');
   locus.ellipse = { rx_m: e.rx, ry_m: e.ry, angle: e.angle, k: e.k, p: ellipseProb(), mag, rx_px: e.rx * scale() * mag, ry_px: e.ry * scale() * mag };
-  ctx.fillStyle = '#1b2a41'; ctx.font = '12px system-ui';
+  ctx.font = '12px system-ui';
+  ctx.fillStyle = '#ffffffd0'; ctx.fillRect(6, 4, ctx.measureText(ellipseLabel()).width + 8, 16);
+  ctx.fillStyle = '#1b2a41';
   ctx.fillText(ellipseLabel(), 10, 16);
   if (s && s.teleop) { ctx.fillStyle = '#b00020'; ctx.fillText('keyboard driving', 10, 32); }
 }
