@@ -6,6 +6,8 @@
 # The firmware (firmware/, its own workspace) also needs qemu-system-arm
 # (Debian's package; installed with apt-get when missing) and rustup's
 # llvm-tools (llvm-nm for the footprint).
+# Also Debian's chromium and chromium-driver for the teaching UI's
+# end-to-end tests (crates/locus-serve/tests/e2e.rs; apt-get, sudo if not root).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -39,6 +41,14 @@ then
   "$PY" -m pip install --quiet -r scripts/requirements-crosscheck.txt
 fi
 
+step "browser: chromium and chromium-driver (teaching UI end-to-end tests)"
+if [ ! -x /usr/bin/chromium ] || [ ! -x /usr/bin/chromedriver ]; then
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO=sudo
+  $SUDO apt-get update
+  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y chromium chromium-driver
+fi
+
 step "format"
 cargo fmt --all -- --check
 
@@ -50,6 +60,13 @@ RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace --locked
 
 step "no_std build for thumbv7em-none-eabihf"
 cargo build --locked -p locus-core -p locus-models -p locus-odometry -p locus-control -p locus-link --no-default-features --target thumbv7em-none-eabihf
+
+step "teaching UI: vendored chart library against the npm lock (when npm is present)"
+# The build never needs npm (uPlot is vendored); with npm the test also
+# compares the vendored files with the package npm installs from the lock.
+if command -v npm >/dev/null 2>&1; then
+  (cd crates/locus-serve/web && npm ci --no-audit --no-fund --silent) || echo "npm ci failed (offline?): checking the recorded hashes only"
+fi
 
 step "tests (optimised test profile)"
 cargo test --workspace --locked

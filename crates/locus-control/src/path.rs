@@ -439,6 +439,22 @@ impl<const N: usize> FollowPath<N> {
     pub fn reset(&mut self) {
         *self = Self::new(self.segments, self.config);
     }
+
+    /// The parameters in use.
+    #[must_use]
+    pub const fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// Replaces the parameters (speeds, gains, tolerances), keeping the
+    /// progress along the path: the current segment continues with the new
+    /// values (the teaching UI changes gains while the robot drives).
+    pub fn set_config(&mut self, config: Config) {
+        self.config = config;
+        if let Some(routine) = self.current.as_mut() {
+            routine.config = config;
+        }
+    }
 }
 
 impl FollowPath<4> {

@@ -628,78 +628,376 @@ fn ideal_observation(
     )))
 }
 
-/// Runs the `square` scenario with `cfg` from `seed`, calling `sink` with
-/// every step's record as the run goes, and returns the summary (a
-/// [`Tally`] of every step's [`Record::sample`]).
-///
-/// # Errors
-/// [`Error::Config`] for an invalid configuration; a robot, sensor or
-/// filter error stops the run (the records already sunk stay valid).
-#[allow(clippy::cast_precision_loss, clippy::too_many_lines)]
-pub fn run_square(
-    cfg: &SquareConfig,
-    seed: u64,
-    sink: &mut impl FnMut(&StepRecord),
-) -> Result<Summary, Error> {
-    cfg.validate()?;
-    let mut tally = Tally::new(3)?;
-    let mut rng = StdRng::seed_from_u64(seed);
-    let world = World::square_arena();
+/// Teleoperation of one step: the wheel command `(V, W)` (m/s, rad/s)
+/// used instead of the path controller's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Teleop {
+    /// Linear speed `V` (m/s).
+    pub v: f64,
+    /// Turn rate `W` (rad/s), counter-clockwise.
+    pub w: f64,
+}
 
-    let (mut robot, true_start) = cfg.true_robot(&mut rng);
-    let (s, sd) = (cfg.start, cfg.initial_std);
+/// The parameters of a [`SquareSim`] that may change while it runs: the
+/// filter's `Q` and `R`, the gate, the injected IR noise and the
+/// controller (speeds and gains). Everything else of the
+/// [`SquareConfig`] takes effect on a new simulation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LiveParams {
+    /// `Q11` (m^2 per step).
+    pub q11: f64,
+    /// `Q22` (rad^2 per step).
+    pub q22: f64,
+    /// `R11` (m^2).
+    pub r11: f64,
+    /// `R22` (m^2).
+    pub r22: f64,
+    /// IR distance noise standard deviation injected in the readings (m).
+    pub ir_sigma: f64,
+    /// Whether the EKF uses the IR readings.
+    pub use_ir: bool,
+    /// Gate confidence (`None`: no gate).
+    pub gate_confidence: Option<f64>,
+    /// The path controller's parameters.
+    pub control: locus_control::Config,
+}
 
-    let wheel = EncoderWheel::new(cfg.encoder_lines, cfg.encoder_gear, cfg.wheel_radius);
-    let mut enc_right = Encoder::new(wheel)?;
-    let mut enc_left = Encoder::new(wheel)?;
-    let (mut last_right, mut last_left) = (enc_right.read(), enc_left.read());
-
-    let pair = IrPair::centred(cfg.ir_spacing);
-    let ir = IrPairSensor::new(pair, SharpIr::assumed(cfg.ir_sigma)?)?;
-
-    let model = DiffDrive::new(cfg.wheelbase, cfg.q11, cfg.q22);
-    let mut ekf = Ekf::<f64>::default();
-    if let Some(c) = cfg.gate_confidence {
-        ekf = ekf.with_gate(ChiSquareGate::new(c)?);
-    }
-    let x0 = Vector3::new(s[0], s[1], s[2]);
-    let p0 = Matrix3::from_diagonal(&Vector3::new(sd[0] * sd[0], sd[1] * sd[1], sd[2] * sd[2]));
-    let mut belief = Belief::new(x0, p0);
-    let mut odo = belief;
-
-    let ideal = cfg.noise == NoiseModel::Ideal;
-    let mut true_x = Vector3::new(true_start.x, true_start.y, true_start.theta);
-    let q_std = [cfg.q11.sqrt(), cfg.q22.sqrt()];
-
-    let mut controller = FollowPath::square(cfg.control);
-
-    let max_steps = (cfg.max_time / cfg.dt).ceil() as usize;
-    let mut laps = 0usize;
-    let mut steps = 0usize;
-
-    while steps < max_steps {
-        let est = locus_control::Pose::new(belief.x[0], belief.x[1], belief.x[2]);
-        let mut command = controller.command(est);
-        if command.done {
-            laps += 1;
-            if laps >= cfg.laps {
-                break;
-            }
-            controller.reset();
-            command = controller.command(est);
+impl LiveParams {
+    /// The live parameters of `cfg`.
+    #[must_use]
+    pub fn of(cfg: &SquareConfig) -> Self {
+        Self {
+            q11: cfg.q11,
+            q22: cfg.q22,
+            r11: cfg.r11,
+            r22: cfg.r22,
+            ir_sigma: cfg.ir_sigma,
+            use_ir: cfg.use_ir,
+            gate_confidence: cfg.gate_confidence,
+            control: cfg.control,
         }
+    }
+
+    /// `cfg` with these live parameters.
+    #[must_use]
+    pub fn apply_to(&self, cfg: &SquareConfig) -> SquareConfig {
+        SquareConfig {
+            q11: self.q11,
+            q22: self.q22,
+            r11: self.r11,
+            r22: self.r22,
+            ir_sigma: self.ir_sigma,
+            use_ir: self.use_ir,
+            gate_confidence: self.gate_confidence,
+            control: self.control,
+            ..*cfg
+        }
+    }
+}
+
+/// The details of one EKF correction, for showing it step by step: the
+/// prediction it starts from, the linearisation, the gain, the innovation,
+/// the gate's decision and the belief after it. Matrices are row-major
+/// (serialised as nested arrays).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct CorrectionDetail {
+    /// The belief before the step's prediction: `x` (m, m, rad).
+    pub x_before_predict: [f64; 3],
+    /// Its covariance.
+    pub p_before_predict: [[f64; 3]; 3],
+    /// The odometry input of the prediction `[d1, d2]` (m).
+    pub u: [f64; 2],
+    /// The predicted state `x-` (m, m, rad).
+    pub x_prior: [f64; 3],
+    /// The predicted covariance `P-`.
+    pub p_prior: [[f64; 3]; 3],
+    /// The measurement `z = [d, theta_m]` (m, rad) from the IR pair.
+    pub z: [f64; 2],
+    /// The predicted measurement `h(x-)` (m, rad).
+    pub h: [f64; 2],
+    /// The measurement Jacobian `H` (2x3) at `x-`.
+    pub jacobian: [[f64; 3]; 2],
+    /// The measurement noise in measurement space `V R V^T` (2x2).
+    pub noise: [[f64; 2]; 2],
+    /// The innovation covariance `S = H P- H^T + V R V^T` (2x2).
+    pub s: [[f64; 2]; 2],
+    /// The Kalman gain `K = P- H^T S^-1` (3x2).
+    pub k: [[f64; 2]; 3],
+    /// The innovation `z - h(x-)` (m, rad; heading wrapped).
+    pub innovation: [f64; 2],
+    /// The NIS `y^T S^-1 y`.
+    pub nis: f64,
+    /// The gate's NIS threshold (`None`: no gate).
+    pub gate_threshold: Option<f64>,
+    /// Whether the correction was applied.
+    pub applied: bool,
+    /// The state after the correction (the prior if rejected).
+    pub x_post: [f64; 3],
+    /// Its covariance.
+    pub p_post: [[f64; 3]; 3],
+}
+
+/// What one [`SquareSim::step`] produced besides its [`StepRecord`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SimStep {
+    /// The step's record (as logged by `locus run`).
+    pub record: StepRecord,
+    /// The command `(V, W)` (m/s, rad/s) applied.
+    pub command: (f64, f64),
+    /// The wheel speeds `(V1, V2)` (m/s, right and left).
+    pub wheel_speeds: (f64, f64),
+    /// Whether the command came from teleoperation.
+    pub teleop: bool,
+    /// The correction's details when a reading was associated and used
+    /// (and [`SquareSim::with_details`] is on).
+    pub correction: Option<CorrectionDetail>,
+}
+
+fn mat3(p: &Matrix3<f64>) -> [[f64; 3]; 3] {
+    [
+        [p[(0, 0)], p[(0, 1)], p[(0, 2)]],
+        [p[(1, 0)], p[(1, 1)], p[(1, 2)]],
+        [p[(2, 0)], p[(2, 1)], p[(2, 2)]],
+    ]
+}
+
+/// The `square` closed loop as a stepper: [`SquareSim::step`] runs one step
+/// of `dt` (the loop of the [module documentation](self)), so a caller can
+/// interleave steps with parameter changes and teleoperation (the teaching
+/// UI). [`run_square`] is a loop over it.
+#[derive(Debug)]
+pub struct SquareSim {
+    cfg: SquareConfig,
+    rng: StdRng,
+    world: World,
+    robot: Robot,
+    wheel: EncoderWheel<f64>,
+    enc_right: Encoder,
+    enc_left: Encoder,
+    last_right: u32,
+    last_left: u32,
+    pair: IrPair<f64>,
+    ir: IrPairSensor,
+    model: DiffDrive<f64>,
+    ekf: Ekf<f64>,
+    belief: Belief<f64, 3>,
+    odo: Belief<f64, 3>,
+    true_x: Vector3<f64>,
+    truth: Pose,
+    controller: FollowPath<4>,
+    max_steps: usize,
+    laps: usize,
+    steps: usize,
+    finished: bool,
+    details: bool,
+}
+
+impl SquareSim {
+    /// A simulation of `cfg` from `seed`, before its first step (the same
+    /// draws from the seed as [`run_square`]).
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] for an invalid configuration; a sensor or gate
+    /// construction error.
+    #[allow(clippy::cast_precision_loss, clippy::cast_sign_loss)]
+    pub fn new(cfg: &SquareConfig, seed: u64) -> Result<Self, Error> {
+        cfg.validate()?;
+        let mut rng = StdRng::seed_from_u64(seed);
+        let world = World::square_arena();
+
+        let (robot, true_start) = cfg.true_robot(&mut rng);
+        let (s, sd) = (cfg.start, cfg.initial_std);
+
+        let wheel = EncoderWheel::new(cfg.encoder_lines, cfg.encoder_gear, cfg.wheel_radius);
+        let enc_right = Encoder::new(wheel)?;
+        let enc_left = Encoder::new(wheel)?;
+        let (last_right, last_left) = (enc_right.read(), enc_left.read());
+
+        let pair = IrPair::centred(cfg.ir_spacing);
+        let ir = IrPairSensor::new(pair, SharpIr::assumed(cfg.ir_sigma)?)?;
+
+        let model = DiffDrive::new(cfg.wheelbase, cfg.q11, cfg.q22);
+        let ekf = Self::ekf(cfg.gate_confidence)?;
+        let x0 = Vector3::new(s[0], s[1], s[2]);
+        let p0 = Matrix3::from_diagonal(&Vector3::new(sd[0] * sd[0], sd[1] * sd[1], sd[2] * sd[2]));
+        let belief = Belief::new(x0, p0);
+
+        Ok(Self {
+            cfg: *cfg,
+            rng,
+            world,
+            robot,
+            wheel,
+            enc_right,
+            enc_left,
+            last_right,
+            last_left,
+            pair,
+            ir,
+            model,
+            ekf,
+            belief,
+            odo: belief,
+            true_x: Vector3::new(true_start.x, true_start.y, true_start.theta),
+            truth: true_start,
+            controller: FollowPath::square(cfg.control),
+            max_steps: (cfg.max_time / cfg.dt).ceil() as usize,
+            laps: 0,
+            steps: 0,
+            finished: false,
+            details: false,
+        })
+    }
+
+    fn ekf(gate: Option<f64>) -> Result<Ekf<f64>, Error> {
+        let mut ekf = Ekf::<f64>::default();
+        if let Some(c) = gate {
+            ekf = ekf.with_gate(ChiSquareGate::new(c)?);
+        }
+        Ok(ekf)
+    }
+
+    /// Whether [`SimStep::correction`] is filled in (off by default: it
+    /// costs a second linearisation per correction).
+    #[must_use]
+    pub fn with_details(mut self, on: bool) -> Self {
+        self.details = on;
+        self
+    }
+
+    /// The configuration in use (with the live parameters last set).
+    #[must_use]
+    pub fn config(&self) -> &SquareConfig {
+        &self.cfg
+    }
+
+    /// Changes the live parameters from the next step on (the filter's
+    /// `Q`, `R` and gate, the injected IR noise, the controller's speeds
+    /// and gains, keeping its progress along the path).
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] naming the first bad field; the simulation then
+    /// keeps its previous parameters.
+    pub fn set_live(&mut self, live: &LiveParams) -> Result<(), Error> {
+        let cfg = live.apply_to(&self.cfg);
+        cfg.validate()?;
+        let ir = IrPairSensor::new(self.pair, SharpIr::assumed(cfg.ir_sigma)?)?;
+        let ekf = Self::ekf(cfg.gate_confidence)?;
+        self.ir = ir;
+        self.ekf = ekf;
+        self.model = DiffDrive::new(cfg.wheelbase, cfg.q11, cfg.q22);
+        self.controller.set_config(cfg.control);
+        self.cfg = cfg;
+        Ok(())
+    }
+
+    /// The EKF belief now.
+    #[must_use]
+    pub fn belief(&self) -> &Belief<f64, 3> {
+        &self.belief
+    }
+
+    /// The true pose now.
+    #[must_use]
+    pub fn truth(&self) -> Pose {
+        self.truth
+    }
+
+    /// The odometry-only belief now.
+    #[must_use]
+    pub fn odometry(&self) -> &Belief<f64, 3> {
+        &self.odo
+    }
+
+    /// The arena's walls.
+    #[must_use]
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// The IR pair sensor (its beams' mountings: [`IrPairSensor::mounts`]).
+    #[must_use]
+    pub fn ir_sensor(&self) -> &IrPairSensor {
+        &self.ir
+    }
+
+    /// Steps run so far.
+    #[must_use]
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// Laps of the square completed so far.
+    #[must_use]
+    pub fn laps(&self) -> usize {
+        self.laps
+    }
+
+    /// Whether the run has ended (laps done or `max_time` reached).
+    #[must_use]
+    pub fn is_finished(&self) -> bool {
+        self.finished
+    }
+
+    /// Runs one step of `dt`: with `teleop`, its command instead of the
+    /// path controller's (the controller then neither advances nor ends
+    /// the run). `Ok(None)` once the run has ended (the laps are done or
+    /// `max_time` is reached; teleoperation still runs after the laps,
+    /// up to `max_time`).
+    ///
+    /// # Errors
+    /// A robot, sensor or filter error; the simulation should not be
+    /// stepped further.
+    #[allow(clippy::cast_precision_loss, clippy::too_many_lines)]
+    pub fn step(&mut self, teleop: Option<Teleop>) -> Result<Option<SimStep>, Error> {
+        let cfg = self.cfg;
+        if self.steps >= self.max_steps {
+            self.finished = true;
+            return Ok(None);
+        }
+        if self.finished && teleop.is_none() {
+            return Ok(None);
+        }
+        let belief_before = self.belief;
+        let command = if let Some(t) = teleop {
+            locus_control::Command {
+                v: t.v,
+                w: t.w,
+                done: false,
+            }
+        } else {
+            let est =
+                locus_control::Pose::new(self.belief.x[0], self.belief.x[1], self.belief.x[2]);
+            let mut command = self.controller.command(est);
+            if command.done {
+                self.laps += 1;
+                if self.laps >= cfg.laps {
+                    self.finished = true;
+                    return Ok(None);
+                }
+                self.controller.reset();
+                command = self.controller.command(est);
+            }
+            command
+        };
         let (v1, v2) = wheel_speeds(command, cfg.wheelbase);
+        let ideal = cfg.noise == NoiseModel::Ideal;
         let (truth, u) = if ideal {
             // The truth moves with the filter's model and noise.
             let u = WheelTravel {
                 d1: v1 * cfg.dt,
                 d2: v2 * cfg.dt,
             };
-            let q = Vector2::new(gauss(&mut rng, q_std[0]), gauss(&mut rng, q_std[1]));
-            true_x = model.f(&true_x, &u, &q);
-            (Pose::new(true_x[0], true_x[1], true_x[2]), u)
+            let q_std = [cfg.q11.sqrt(), cfg.q22.sqrt()];
+            let q = Vector2::new(
+                gauss(&mut self.rng, q_std[0]),
+                gauss(&mut self.rng, q_std[1]),
+            );
+            self.true_x = self.model.f(&self.true_x, &u, &q);
+            let x = &self.true_x;
+            (Pose::new(x[0], x[1], x[2]), u)
         } else {
-            let out = robot.step(
+            let out = self.robot.step(
                 &Command::Wheels {
                     left: v2,
                     right: v1,
@@ -708,29 +1006,36 @@ pub fn run_square(
             )?;
 
             // Encoders -> wrapping count differences -> wheel travels.
-            enc_right.advance(
+            self.enc_right.advance(
                 out.measured_travel.right * (1.0 + cfg.right_scale_error),
-                &mut rng,
+                &mut self.rng,
             )?;
-            enc_left.advance(out.measured_travel.left, &mut rng)?;
-            let (now_right, now_left) = (enc_right.read(), enc_left.read());
+            self.enc_left
+                .advance(out.measured_travel.left, &mut self.rng)?;
+            let (now_right, now_left) = (self.enc_right.read(), self.enc_left.read());
+            let wheel = &self.wheel;
             let u = WheelTravel {
-                d1: wheel.distance(wrapping_diff(now_right, last_right, COUNTER_BITS)),
-                d2: wheel.distance(wrapping_diff(now_left, last_left, COUNTER_BITS)),
+                d1: wheel.distance(wrapping_diff(now_right, self.last_right, COUNTER_BITS)),
+                d2: wheel.distance(wrapping_diff(now_left, self.last_left, COUNTER_BITS)),
             };
-            (last_right, last_left) = (now_right, now_left);
+            (self.last_right, self.last_left) = (now_right, now_left);
             (out.pose, u)
         };
+        self.truth = truth;
 
-        belief = ekf.predict(&belief, &model, &u)?;
-        odo = ekf.predict(&odo, &model, &u)?;
+        self.belief = self.ekf.predict(&self.belief, &self.model, &u)?;
+        self.odo = self.ekf.predict(&self.odo, &self.model, &u)?;
 
         let (mut innovation, mut nis, mut applied, mut gain) = (None, None, false, None);
+        let mut detail = None;
         // The raw readings (for the log) and, if associated, the observation.
         let (reading, observation) = if ideal {
             let r_std = [cfg.r11.sqrt(), cfg.r22.sqrt()];
-            let noise = Vector2::new(gauss(&mut rng, r_std[0]), gauss(&mut rng, r_std[1]));
-            match ideal_observation(cfg, &ir, &world, &true_x, &noise)? {
+            let noise = Vector2::new(
+                gauss(&mut self.rng, r_std[0]),
+                gauss(&mut self.rng, r_std[1]),
+            );
+            match ideal_observation(&cfg, &self.ir, &self.world, &self.true_x, &noise)? {
                 Some((obs, z)) => (
                     Some((obs.ds1 + noise[0], obs.ds2 + noise[1])),
                     Some((obs, z)),
@@ -738,10 +1043,14 @@ pub fn run_square(
                 None => (None, None),
             }
         } else {
-            let reading = ir.read(&world.walls, [truth.x, truth.y, truth.theta], &mut rng)?;
+            let reading = self.ir.read(
+                &self.world.walls,
+                [truth.x, truth.y, truth.theta],
+                &mut self.rng,
+            )?;
+            let (pair, walls, belief) = (self.pair, &self.world.walls, &self.belief);
             let observation = reading.and_then(|(ds1, ds2)| {
-                let wall =
-                    associate_ir_wall(&belief.x, &pair, &world.walls, cfg.association_range)?;
+                let wall = associate_ir_wall(&belief.x, &pair, walls, cfg.association_range)?;
                 let obs = IrPairObservation {
                     pair,
                     wall,
@@ -756,32 +1065,40 @@ pub fn run_square(
         };
         let observation = observation.filter(|_| cfg.use_ir);
         if let Some((obs, z)) = observation {
-            let c = ekf.correct(&belief, &obs, &z)?;
+            let prior = self.belief;
+            let c = self.ekf.correct(&prior, &obs, &z)?;
             gain = Some(if c.applied {
-                gain_diagonal(&obs, &belief)
+                gain_diagonal(&obs, &prior)
             } else {
                 [0.0, 0.0]
             });
             innovation = Some([c.innovation[0], c.innovation[1]]);
             nis = Some(c.nis);
             applied = c.applied;
-            belief = c.belief;
+            self.belief = c.belief;
+            detail = self.details.then(|| {
+                correction_detail(
+                    &obs,
+                    &z,
+                    &belief_before,
+                    [u.d1, u.d2],
+                    &prior,
+                    &c,
+                    self.ekf.gate.map(|g| g.threshold(2)),
+                )
+            });
         }
 
+        let belief = &self.belief;
         let n = nees(&belief.x, &belief.p, &truth);
-        steps += 1;
-        let p = &belief.p;
+        self.steps += 1;
         let record = StepRecord {
-            step: steps - 1,
-            time: steps as f64 * cfg.dt,
+            step: self.steps - 1,
+            time: self.steps as f64 * cfg.dt,
             truth,
             ekf: [belief.x[0], belief.x[1], belief.x[2]],
-            ekf_cov: [
-                [p[(0, 0)], p[(0, 1)], p[(0, 2)]],
-                [p[(1, 0)], p[(1, 1)], p[(1, 2)]],
-                [p[(2, 0)], p[(2, 1)], p[(2, 2)]],
-            ],
-            odometry: [odo.x[0], odo.x[1], odo.x[2]],
+            ekf_cov: mat3(&belief.p),
+            odometry: [self.odo.x[0], self.odo.x[1], self.odo.x[2]],
             wheel_travel: [u.d1, u.d2],
             ir: reading,
             innovation,
@@ -790,9 +1107,86 @@ pub fn run_square(
             gain,
             nees: n,
         };
-        tally.push(&record.sample());
-        sink(&record);
+        Ok(Some(SimStep {
+            record,
+            command: (command.v, command.w),
+            wheel_speeds: (v1, v2),
+            teleop: teleop.is_some(),
+            correction: detail,
+        }))
     }
+}
 
-    Ok(tally.summary(laps))
+/// The [`CorrectionDetail`] of the correction `c` of `prior` by `obs`
+/// with measurement `z`.
+fn correction_detail(
+    obs: &IrPairObservation<f64>,
+    z: &Vector2<f64>,
+    before: &Belief<f64, 3>,
+    u: [f64; 2],
+    prior: &Belief<f64, 3>,
+    c: &locus_core::Correction<f64, 3, 2>,
+    gate_threshold: Option<f64>,
+) -> CorrectionDetail {
+    let h = obs.jacobian(&prior.x);
+    let noise = obs.noise(&prior.x);
+    let s = h * prior.p * h.transpose() + noise;
+    let k = s
+        .try_inverse()
+        .map_or_else(locus_core::nalgebra::Matrix3x2::zeros, |si| {
+            prior.p * h.transpose() * si
+        });
+    let hx = obs.h(&prior.x).unwrap_or_else(Vector2::zeros);
+    let m2 =
+        |m: &locus_core::nalgebra::Matrix2<f64>| [[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]];
+    let v3 = |v: &Vector3<f64>| [v[0], v[1], v[2]];
+    CorrectionDetail {
+        x_before_predict: v3(&before.x),
+        p_before_predict: mat3(&before.p),
+        u,
+        x_prior: v3(&prior.x),
+        p_prior: mat3(&prior.p),
+        z: [z[0], z[1]],
+        h: [hx[0], hx[1]],
+        jacobian: [
+            [h[(0, 0)], h[(0, 1)], h[(0, 2)]],
+            [h[(1, 0)], h[(1, 1)], h[(1, 2)]],
+        ],
+        noise: m2(&noise),
+        s: m2(&s),
+        k: [
+            [k[(0, 0)], k[(0, 1)]],
+            [k[(1, 0)], k[(1, 1)]],
+            [k[(2, 0)], k[(2, 1)]],
+        ],
+        innovation: [c.innovation[0], c.innovation[1]],
+        nis: c.nis,
+        gate_threshold,
+        applied: c.applied,
+        x_post: v3(&c.belief.x),
+        p_post: mat3(&c.belief.p),
+    }
+}
+
+/// Runs the `square` scenario with `cfg` from `seed`, calling `sink` with
+/// every step's record as the run goes, and returns the summary (a
+/// [`Tally`] of every step's [`Record::sample`]). A loop over
+/// [`SquareSim::step`] without teleoperation.
+///
+/// # Errors
+/// [`Error::Config`] for an invalid configuration; a robot, sensor or
+/// filter error stops the run (the records already sunk stay valid).
+pub fn run_square(
+    cfg: &SquareConfig,
+    seed: u64,
+    sink: &mut impl FnMut(&StepRecord),
+) -> Result<Summary, Error> {
+    cfg.validate()?;
+    let mut tally = Tally::new(3)?;
+    let mut sim = SquareSim::new(cfg, seed)?;
+    while let Some(step) = sim.step(None)? {
+        tally.push(&step.record.sample());
+        sink(&step.record);
+    }
+    Ok(tally.summary(sim.laps()))
 }

@@ -21,7 +21,9 @@ pub mod tricycle_slip;
 pub mod wall45;
 pub mod world;
 
-pub use closed_loop::{SquareConfig, StepRecord, run_square};
+pub use closed_loop::{
+    CorrectionDetail, LiveParams, SimStep, SquareConfig, SquareSim, StepRecord, Teleop, run_square,
+};
 pub use robot::{Command, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, WheelTravel};
 pub use scenario::{Record, Sample, Summary, Tally};
 pub use sensors::{Encoder, IrPairSensor, Laser, SensorError, SharpIr};

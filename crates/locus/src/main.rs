@@ -15,6 +15,7 @@ mod replay;
 mod reproduce;
 mod robot;
 mod run;
+mod serve;
 mod tune;
 
 use std::process::ExitCode;
@@ -78,6 +79,12 @@ enum Command {
     /// by maximising the innovation likelihood (argmin's Nelder-Mead);
     /// prints the values and every robot's errors before and after.
     Tune(tune::Args),
+    /// The teaching UI in the browser (paper 001's interface): an HTTP and
+    /// WebSocket server on 127.0.0.1:8080 (--addr to change) running the
+    /// square closed loop per browser tab; the page shows the arena, the
+    /// covariance ellipse, live plots, Q/R/gain controls, the guide's steps
+    /// a) to f), one correction step by step, and exports the log as CSV.
+    Serve(serve::Args),
 }
 
 fn main() -> ExitCode {
@@ -93,6 +100,7 @@ fn main() -> ExitCode {
         Command::Host(args) => host::run(&args),
         Command::Replay(args) => replay::run(&args),
         Command::Tune(args) => tune::run(&args),
+        Command::Serve(args) => serve::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

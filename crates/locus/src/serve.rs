@@ -1,0 +1,79 @@
+//! `locus serve`: the teaching UI in the browser (crate `locus-serve`).
+
+use core::net::SocketAddr;
+
+use anyhow::{Context, Result, bail};
+use clap::Args as ClapArgs;
+use locus_sim::scenario_file::{self, BUILTIN, ScenarioConfig};
+
+/// Arguments of `locus serve`.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    /// Scenario each session starts from: `square`, `square-ideal`, or a
+    /// TOML scenario file with `scenario = "square"` (the page can switch
+    /// between the two built-ins and load the guide's steps a to f).
+    #[arg(default_value = "square")]
+    scenario: String,
+    /// Address to listen on. The default is the loopback interface only:
+    /// anyone who can reach the port can drive the simulation, so give
+    /// another address (e.g. 0.0.0.0:8080) only on a network you trust.
+    #[arg(long, default_value = "127.0.0.1:8080")]
+    addr: SocketAddr,
+    /// Seed of every session's simulation (Reset replays it).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Most concurrent sessions (browser tabs); more are refused with 503.
+    #[arg(long, default_value_t = 64)]
+    max_sessions: usize,
+}
+
+/// The square-kind configuration of `arg` (a built-in name or a file).
+fn scenario(arg: &str) -> Result<(String, locus_sim::SquareConfig)> {
+    let (name, cfg) = if let Some(cfg) = ScenarioConfig::builtin(arg) {
+        (arg.to_string(), cfg)
+    } else if std::path::Path::new(arg).is_file() {
+        (
+            arg.to_string(),
+            scenario_file::load(std::path::Path::new(arg))?,
+        )
+    } else {
+        bail!(
+            "unknown scenario `{arg}`; built-in: {}, or a scenario file FILE.toml",
+            BUILTIN.join(", ")
+        );
+    };
+    match cfg {
+        ScenarioConfig::Square(c) => Ok((name, c)),
+        other => Err(locus_serve::Error::Scenario(other.kind().to_string()).into()),
+    }
+}
+
+/// Runs the server until interrupted.
+pub fn run(args: &Args) -> Result<()> {
+    let (name, cfg) = scenario(&args.scenario)?;
+    let mut config = locus_serve::Config::new(&name, cfg)?;
+    config.seed = args.seed;
+    config.limits.max_sessions = args.max_sessions;
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .context("starting the async runtime")?;
+    runtime.block_on(async {
+        let listener = tokio::net::TcpListener::bind(args.addr)
+            .await
+            .with_context(|| format!("binding {}", args.addr))?;
+        let addr = listener.local_addr()?;
+        println!(
+            "Locus teaching UI on http://{addr}/ (scenario {name}, seed {}); Ctrl-C stops it",
+            args.seed
+        );
+        if !addr.ip().is_loopback() {
+            println!(
+                "warning: listening on {}: reachable from the network",
+                addr.ip()
+            );
+        }
+        locus_serve::serve(listener, config).await?;
+        Ok(())
+    })
+}
