@@ -3,14 +3,14 @@
 //! figure measured on the session's run.
 //!
 //! The configurations are those of `locus guide`
-//! ([`locus_sim::guide`]): the default `square` without a gate, IR noise
-//! of [`IR_NOISE`] from step c on, `R` and `Q` from [`R_TINY`],
-//! [`Q_TINY`], [`Q_HUGE`]. `locus guide` judges each step over 10 seeds;
+//! ([`locus_sim::guide::step_config`], on the served scenario): no gate,
+//! IR noise of [`locus_sim::guide::IR_NOISE`] from step c on, `R` and `Q`
+//! from [`locus_sim::guide::R_TINY`], [`locus_sim::guide::Q_TINY`],
+//! [`locus_sim::guide::Q_HUGE`]. `locus guide` judges each step over 10 seeds;
 //! the page shows the same figure for the one run being watched, so a
 //! live verdict can differ from the guide's on an unlucky seed.
 
 use locus_sim::SquareConfig;
-use locus_sim::guide::{IR_NOISE, Q_HUGE, Q_TINY, R_TINY};
 use serde::Serialize;
 
 /// One preset as the page lists it.
@@ -65,48 +65,6 @@ pub const PRESETS: [Preset; 6] = [
         criterion: "RMSE below c's, d's and e's",
     },
 ];
-
-/// The configuration of step `step` on top of `base` (the scenario's
-/// configuration: its start, laps and robot are kept), or `None` for an
-/// unknown letter.
-#[must_use]
-pub fn config(step: char, base: &SquareConfig) -> Option<SquareConfig> {
-    let guide = SquareConfig {
-        gate_confidence: None,
-        use_ir: true,
-        ..*base
-    };
-    let defaults = SquareConfig::default();
-    let r_noise = IR_NOISE * IR_NOISE;
-    let noisy = |r: f64, q: (f64, f64)| SquareConfig {
-        ir_sigma: IR_NOISE,
-        r11: r,
-        r22: r,
-        q11: q.0,
-        q22: q.1,
-        ..guide
-    };
-    Some(match step {
-        'a' => SquareConfig {
-            use_ir: false,
-            ..guide
-        },
-        'b' => SquareConfig {
-            ir_sigma: 0.0,
-            r11: R_TINY,
-            r22: R_TINY,
-            ..guide
-        },
-        'c' => noisy(R_TINY, (defaults.q11, defaults.q22)),
-        'd' => noisy(r_noise, Q_TINY),
-        'e' => noisy(r_noise, Q_HUGE),
-        'f' => SquareConfig {
-            gate_confidence: defaults.gate_confidence,
-            ..noisy(r_noise, (defaults.q11, defaults.q22))
-        },
-        _ => return None,
-    })
-}
 
 /// Running figures of one run, enough for every step's criterion.
 #[derive(Debug, Clone, Copy, Default, Serialize)]
@@ -350,6 +308,7 @@ pub fn live_figure(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use locus_sim::guide::{IR_NOISE, Q_TINY, step_config as config};
 
     #[test]
     fn presets_are_the_guide_configurations() {

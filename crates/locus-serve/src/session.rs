@@ -300,7 +300,7 @@ impl Session {
                         "the guide runs on the `square` scenario: switch to it first",
                     ));
                 }
-                let Some(cfg) = presets::config(letter, &self.scenario_base) else {
+                let Some(cfg) = locus_sim::guide::step_config(letter, &self.scenario_base) else {
                     return Err(Invalid::new("preset", "unknown step"));
                 };
                 self.cfg = SquareConfig {

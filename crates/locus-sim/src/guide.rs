@@ -88,12 +88,49 @@ struct Run {
     trace_end: f64,
 }
 
-/// The base of every step: the default `square`, no gate, `laps` laps.
-fn base() -> SquareConfig {
-    SquareConfig {
+/// The configuration of guide step `step` (`'a'` to `'f'`, the table
+/// above) on top of `base`, or `None` for another letter. Every step runs
+/// `base` without a gate and with the IR in use (a runs without it), so a
+/// user's scenario keeps its start, laps and robot; `locus guide` uses the
+/// default `square`, the teaching UI the scenario it serves.
+#[must_use]
+pub fn step_config(step: char, base: &SquareConfig) -> Option<SquareConfig> {
+    let guide = SquareConfig {
         gate_confidence: None,
-        ..SquareConfig::default()
-    }
+        use_ir: true,
+        ..*base
+    };
+    let defaults = SquareConfig::default();
+    let default_q = (defaults.q11, defaults.q22);
+    let r_noise = IR_NOISE * IR_NOISE;
+    let noisy = |r: f64, q: (f64, f64)| SquareConfig {
+        ir_sigma: IR_NOISE,
+        r11: r,
+        r22: r,
+        q11: q.0,
+        q22: q.1,
+        ..guide
+    };
+    Some(match step {
+        'a' => SquareConfig {
+            use_ir: false,
+            ..guide
+        },
+        'b' => SquareConfig {
+            ir_sigma: 0.0,
+            r11: R_TINY,
+            r22: R_TINY,
+            ..guide
+        },
+        'c' => noisy(R_TINY, default_q),
+        'd' => noisy(r_noise, Q_TINY),
+        'e' => noisy(r_noise, Q_HUGE),
+        'f' => SquareConfig {
+            gate_confidence: defaults.gate_confidence,
+            ..noisy(r_noise, default_q)
+        },
+        _ => return None,
+    })
 }
 
 /// Runs `cfg` from `seed` and measures what the guide needs.
@@ -257,39 +294,15 @@ pub fn run_guide(seed: u64) -> Result<Vec<GuideStep>, Error> {
     let cm = |v: f64| 100.0 * v;
     let r_noise = IR_NOISE * IR_NOISE;
     let seeds: Vec<u64> = (seed..seed.saturating_add(RUNS_PER_STEP)).collect();
-    let noisy = |r: f64, q: (f64, f64)| SquareConfig {
-        ir_sigma: IR_NOISE,
-        r11: r,
-        r22: r,
-        q11: q.0,
-        q22: q.1,
-        ..base()
-    };
-    let default_q = (base().q11, base().q22);
-
-    let a = Set::run(
-        &SquareConfig {
-            use_ir: false,
-            ..base()
-        },
-        &seeds,
-    )?;
-    let b = Set::run(
-        &SquareConfig {
-            ir_sigma: 0.0,
-            r11: R_TINY,
-            r22: R_TINY,
-            ..base()
-        },
-        &seeds,
-    )?;
-    let c = Set::run(&noisy(R_TINY, default_q), &seeds)?;
-    let d = Set::run(&noisy(r_noise, Q_TINY), &seeds)?;
-    let e = Set::run(&noisy(r_noise, Q_HUGE), &seeds)?;
-    let tuned = SquareConfig {
-        gate_confidence: SquareConfig::default().gate_confidence,
-        ..noisy(r_noise, default_q)
-    };
+    let default = SquareConfig::default();
+    let step =
+        |letter: char| step_config(letter, &default).ok_or(Error::Config("guide: unknown step"));
+    let a = Set::run(&step('a')?, &seeds)?;
+    let b = Set::run(&step('b')?, &seeds)?;
+    let c = Set::run(&step('c')?, &seeds)?;
+    let d = Set::run(&step('d')?, &seeds)?;
+    let e = Set::run(&step('e')?, &seeds)?;
+    let tuned = step('f')?;
     let f = Set::run(&tuned, &seeds)?;
     let (nees_share, nees_mean) = nees_test((tuned.q11, tuned.q22), r_noise, seed)?;
 
