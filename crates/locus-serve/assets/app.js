@@ -195,7 +195,7 @@ function showCorrection(d) {
     ['3. innovation y = z − h(x⁻)', vec(d.innovation)],
     ['4. gate', `${gate} → <span class="${d.applied ? 'accept' : 'reject'}">${d.applied ? 'ACCEPTED' : 'REJECTED'}</span>`],
     ['5. x⁺ = x⁻ + K y', vec(d.x_post)],
-    ['P⁺ = (I − K H) P⁻ (I − K H)ᵀ + K V R Vᵀ Kᵀ (Joseph form)', mat(d.p_post)],
+    ['P⁺ (Joseph form)<br>= (I−KH) P⁻ (I−KH)ᵀ<br>&nbsp;&nbsp;+ K V R Vᵀ Kᵀ', mat(d.p_post)],
   ];
   $('detail').innerHTML = '<table>' + rows.map(([k, v]) => `<tr><td>${k}</td><td class="m">${v}</td></tr>`).join('') + '</table>';
   drawDetail(d);
