@@ -258,7 +258,10 @@ async fn health(State(shared): State<Arc<Shared>>) -> Response {
 }
 
 /// Whether the upgrade's `Origin` is the page's own: absent (not a browser:
-/// no other site is involved) or `http://` + `Host`.
+/// no other site is involved) or `http://` + `Host`, where `Host` names
+/// this machine by `localhost` or by an IP address. A domain name is
+/// refused even when Origin and Host agree: that is what a DNS-rebinding
+/// page (a foreign site whose name now resolves to this server) sends.
 fn origin_allowed(headers: &HeaderMap) -> bool {
     let Some(origin) = headers.get(header::ORIGIN) else {
         return true;
@@ -266,9 +269,25 @@ fn origin_allowed(headers: &HeaderMap) -> bool {
     let Some(host) = headers.get(header::HOST).and_then(|h| h.to_str().ok()) else {
         return false;
     };
-    origin
-        .to_str()
-        .is_ok_and(|o| o.strip_prefix("http://") == Some(host))
+    host_is_address(host)
+        && origin
+            .to_str()
+            .is_ok_and(|o| o.strip_prefix("http://") == Some(host))
+}
+
+/// Whether a `Host` header value (`name[:port]`, `[v6][:port]`) names the
+/// server by `localhost` or an IP literal rather than by a domain name.
+fn host_is_address(host: &str) -> bool {
+    let name = if let Some(rest) = host.strip_prefix('[') {
+        // An IPv6 literal: `[addr]` or `[addr]:port`.
+        match rest.split_once(']') {
+            Some((addr, tail)) if tail.is_empty() || tail.starts_with(':') => addr,
+            _ => return false,
+        }
+    } else {
+        host.rsplit_once(':').map_or(host, |(name, _port)| name)
+    };
+    name.eq_ignore_ascii_case("localhost") || name.parse::<std::net::IpAddr>().is_ok()
 }
 
 async fn ws(

@@ -101,13 +101,35 @@ async fn websocket_with_a_foreign_origin_is_refused() {
         assert_eq!(s, StatusCode::FORBIDDEN, "{origin}");
         assert!(String::from_utf8_lossy(&body).contains("foreign Origin"));
     }
+    // DNS rebinding: a foreign name that now resolves to this server sends
+    // matching Origin and Host; a domain name is refused.
+    for host in [
+        "evil.example:8080",
+        "evil.example",
+        "rebind.127.0.0.1.nip.io:8080",
+    ] {
+        let mut h = UPGRADE.to_vec();
+        h.push(("host", host));
+        let origin = format!("http://{host}");
+        h.push(("origin", &origin));
+        let (s, _, _) = get("/ws", &h).await;
+        assert_eq!(s, StatusCode::FORBIDDEN, "{host}");
+    }
     // The page's own origin passes the check (without a real connection the
-    // upgrade itself cannot complete: not a 403).
-    let mut h = UPGRADE.to_vec();
-    h.push(("host", "localhost:8080"));
-    h.push(("origin", "http://localhost:8080"));
-    let (s, _, _) = get("/ws", &h).await;
-    assert_ne!(s, StatusCode::FORBIDDEN);
+    // upgrade itself cannot complete: not a 403), by localhost or by address.
+    for host in [
+        "localhost:8080",
+        "127.0.0.1:8080",
+        "[::1]:8080",
+        "192.168.1.20:8080",
+    ] {
+        let mut h = UPGRADE.to_vec();
+        h.push(("host", host));
+        let origin = format!("http://{host}");
+        h.push(("origin", &origin));
+        let (s, _, _) = get("/ws", &h).await;
+        assert_ne!(s, StatusCode::FORBIDDEN, "{host}");
+    }
 }
 
 fn session() -> Session {
