@@ -287,7 +287,7 @@ fn host_is_address(host: &str) -> bool {
     } else {
         host.rsplit_once(':').map_or(host, |(name, _port)| name)
     };
-    name.eq_ignore_ascii_case("localhost") || name.parse::<std::net::IpAddr>().is_ok()
+    name.eq_ignore_ascii_case("localhost") || name.parse::<core::net::IpAddr>().is_ok()
 }
 
 async fn ws(
