@@ -567,7 +567,19 @@ fn robot_and_host_run_the_square_over_udp() {
     let robot_addr = addr.clone();
     let robot = std::thread::spawn(move || {
         Command::new(env!("CARGO_BIN_EXE_locus"))
-            .args(["robot", "--udp", &robot_addr, "--time-scale", "50"])
+            // At 50x a default idle exit (2 s of robot time) is 40 ms of
+            // wall time: a test machine busy with the other tests can
+            // starve the host that long. 100 s of robot time is 2 s of wall
+            // time; the run still ends on its own after the laps.
+            .args([
+                "robot",
+                "--udp",
+                &robot_addr,
+                "--time-scale",
+                "50",
+                "--idle-exit",
+                "100",
+            ])
             .output()
     });
     let host = locus(&["host", "--robot", &addr]);
