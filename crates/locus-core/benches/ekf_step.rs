@@ -32,7 +32,8 @@
 //! and chained steps (each step starts from the previous posterior: the
 //! latency a filter sees). `scripts/bench_instructions.sh` counts the
 //! instructions per step of the same variants under callgrind
-//! (`EKF_STEP_RUN=<variant>:<n>[:chained]` runs one variant and exits).
+//! (`EKF_STEP_RUN=<variant>:<n>[:chained]` runs one variant and exits;
+//! `EKF_STEP_INTERLEAVED=1` prints only the interleaved tables).
 //!
 //! Note: timings of generic code depend on LLVM's inlining decisions, which
 //! depend on how many instances share a nalgebra operator in the binary;
@@ -771,6 +772,12 @@ fn main() {
         return;
     }
     check_agreement();
+    // `EKF_STEP_INTERLEAVED=1`: only the interleaved tables (about 15 s),
+    // for repeated runs.
+    if std::env::var_os("EKF_STEP_INTERLEAVED").is_some() {
+        print_interleaved();
+        return;
+    }
     // Truncate to whole seconds: some filesystems store coarse mtimes.
     let started = SystemTime::now() - Duration::from_secs(1);
     let mut c = Criterion::default()
