@@ -34,7 +34,8 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run the paper-001 EKF along one wall of the square arena and compare it
-    /// with odometry alone (a small built-in example until the simulator lands).
+    /// with odometry alone: one leg, open loop, in a few lines of the library
+    /// API (`locus run` is the full closed loop).
     Demo(demo::DemoArgs),
     /// Run a closed-loop scenario of the simulator (square, square-ideal,
     /// wall45, tricycle-slip, hover: robot, sensors, filter against
