@@ -43,6 +43,16 @@ pub const Q_TINY: (f64, f64) = (1e-14, 1e-14);
 /// so the gain on the position is near 1.
 pub const Q_HUGE: (f64, f64) = (1.0, 1e4);
 
+/// Why step e fails on this model, for a reader of the guide's verdict
+/// (the README, section `locus guide`, gives the derivation and a sweep
+/// over Q).
+pub const E_NOTE: &str = "e)'s two [assumed] thresholds cannot both hold for paper 001's model: \
+    Q is the noise of the odometry increments (d, dtheta), so Q22 alone leaves the gain on the \
+    measured wall coordinate near 0 (the IR heading explains it), and the Q11 that lifts the gain \
+    to 0.9 also drags the unobserved along-wall coordinate by about nu cot(psi) per reading \
+    (psi: the estimate's angle to the wall). Sweep: cargo run --release -p locus-sim --example \
+    guide_e_sweep";
+
 /// Runs per step (seeds `seed..seed + RUNS_PER_STEP`); the figures are
 /// means over them (a single lost-robot run is chaotic).
 pub const RUNS_PER_STEP: u64 = 10;

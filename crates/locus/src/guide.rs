@@ -57,6 +57,9 @@ pub fn run(args: &GuideArgs) -> Result<()> {
             .saturating_add(locus_sim::guide::RUNS_PER_STEP - 1),
         locus_sim::guide::RUNS_PER_STEP
     ))?;
+    if steps.iter().any(|s| s.step == 'e' && !s.passed) {
+        print_out(&format!("note: {}\n", locus_sim::guide::E_NOTE))?;
+    }
     if !failed.is_empty() {
         bail!(
             "{} of {} steps failed their criterion: {}",
