@@ -397,7 +397,10 @@ fn guide_prints_every_step_and_exits_with_the_verdict() {
     let fails = stdout.matches("FAIL").count();
     assert_eq!(out.status.success(), fails == 0, "{stdout}");
     // A failed e) comes with the note that says why.
-    let e_row = stdout.lines().find(|l| l.contains("e)")).expect("row e)");
+    let e_row = stdout
+        .lines()
+        .find(|l| l.trim_start_matches('│').trim_start().starts_with("e)"))
+        .expect("row e)");
     assert_eq!(
         stdout.contains("note: e)"),
         e_row.contains("FAIL"),
