@@ -199,7 +199,12 @@ impl<T: Scalar> Ekf<T> {
         };
         // y = S^-1 nu serves both the NIS (nu . y) and the state update
         // (G nu = P H^T y), so the state does not wait for the gain.
-        let y = mul(&s_inv, &lin.nu);
+        // These three small products use nalgebra's operators, which LLVM
+        // inlines here: on the ekf_step bench they executed fewer
+        // instructions than the `linalg` kernels (f32 556 -> 544 per step,
+        // f64 624 -> 606), with bit-identical results (the firmware's
+        // checksum is unchanged).
+        let y = s_inv * lin.nu;
         let nis = lin.nu.dot(&y);
         if !finite(nis) {
             return Err(diagnose_correct(belief, model, z, mask)
@@ -219,8 +224,8 @@ impl<T: Scalar> Ekf<T> {
                 });
             }
         }
-        let x = belief.x + mul(&pht, &y);
-        let g = mul(&pht, &s_inv);
+        let x = belief.x + pht * y;
+        let g = pht * s_inv;
         let p_post = match self.update {
             CovarianceUpdate::Joseph => {
                 let ikh = SMatrix::<T, N, N>::identity() - mul(&g, &lin.h);
