@@ -129,29 +129,32 @@ pub(crate) fn finite<T: Scalar>(v: T) -> bool {
 mod tests {
     use super::*;
 
-    #[test]
-    fn all_finite_pair_is_exact_when_the_sum_overflows() {
-        let big = [f64::MAX, f64::MAX, 1.0];
+    /// The same answers for both sums (f32: one chain; f64: four lanes),
+    /// `max` the largest finite value and `tiny` a subnormal.
+    fn check_all_finite_pair<T: Scalar>(max: T, tiny: T) {
+        let c = crate::cast::<T>;
+        let big = [max, max, c(1.0)];
         // The sum overflows, every value is finite: the exact path answers.
-        assert!(all_finite_pair(&big, &[f64::MAX]));
-        assert!(all_finite_pair(&[f32::MAX, f32::MAX], &[-f32::MAX, 1.0]));
-        // f32 takes the one-chain sum: the same answers.
-        let big32 = [f32::MAX, f32::MAX, 1.0];
-        assert!(all_finite_pair(&big32, &[f32::MAX; 9]));
-        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
-            assert!(!all_finite_pair(&[1.0, bad, 2.0], &[3.0; 9]));
-            assert!(!all_finite_pair(&[1.0; 3], &[3.0, 4.0, bad]));
-            assert!(!all_finite_pair(&big32, &[bad]));
-        }
-        assert!(!all_finite_pair(&[f32::INFINITY], &[f32::NEG_INFINITY]));
-        assert!(all_finite_pair(&[0.0f32, -0.0, 1e-40], &[-1e30; 9]));
-        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
-            assert!(!all_finite_pair(&[1.0, bad, 2.0], &[3.0; 9]));
-            assert!(!all_finite_pair(&[1.0; 3], &[3.0, 4.0, bad]));
+        assert!(all_finite_pair(&big, &[max]));
+        assert!(all_finite_pair(&big, &[max; 9]));
+        assert!(all_finite_pair(&[max, max], &[-max, c(1.0)]));
+        let inf = c(f64::INFINITY);
+        for bad in [c(f64::NAN), inf, -inf] {
+            assert!(!all_finite_pair(&[c(1.0), bad, c(2.0)], &[c(3.0); 9]));
+            assert!(!all_finite_pair(&[c(1.0); 3], &[c(3.0), c(4.0), bad]));
             assert!(!all_finite_pair(&big, &[bad]));
         }
         // inf - inf in the sum is NaN, not finite.
-        assert!(!all_finite_pair(&[f64::INFINITY], &[f64::NEG_INFINITY]));
-        assert!(all_finite_pair(&[0.0, -0.0, 1e-310], &[-1e300; 9]));
+        assert!(!all_finite_pair(&[inf], &[-inf]));
+        assert!(all_finite_pair(
+            &[c(0.0), c(-0.0), tiny],
+            &[-max / c(4.0); 9]
+        ));
+    }
+
+    #[test]
+    fn all_finite_pair_is_exact_when_the_sum_overflows() {
+        check_all_finite_pair(f64::MAX, 1e-310);
+        check_all_finite_pair(f32::MAX, 1e-40);
     }
 }
