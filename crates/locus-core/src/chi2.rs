@@ -2,7 +2,7 @@
 //!
 //! Used for chi-square gating of the normalised innovation squared (NIS)
 //! `e = y^T S^-1 y` of a correction (innovation `y = z - h(X-)`, innovation
-//! covariance `S = H P- H^T + V R V^T`, spec `/work/shared/spec/MODELS.md`
+//! covariance `S = H P- H^T + V R V^T`, spec `shared/spec/MODELS.md`
 //! section 1): for a consistent filter `e` is chi-square distributed with
 //! `m` degrees of freedom (`m` = number of measurement components), see
 //! [`crate::gate::ChiSquareGate`] and [`crate::consistency::ConsistencyMonitor`].

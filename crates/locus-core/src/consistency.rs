@@ -3,7 +3,7 @@
 //! For a consistent filter the normalised innovation squared
 //! `NIS = y^T S^-1 y` of each correction (innovation `y = z - h(X-)`,
 //! innovation covariance `S = H P- H^T + V R V^T`, spec
-//! `/work/shared/spec/MODELS.md` section 1) is dimensionless and chi-square
+//! `shared/spec/MODELS.md` section 1) is dimensionless and chi-square
 //! distributed with `m` degrees of freedom, `m` the measurement dimension.
 //! Innovations of different steps are independent, so the sum of the NIS over
 //! a window of `n` corrections is chi-square with `sum(m)` degrees of freedom.

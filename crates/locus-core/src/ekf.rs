@@ -55,6 +55,13 @@ pub struct Correction<T: Scalar, const N: usize, const M: usize> {
     pub dof: u32,
     /// Whether the update was applied (`false`: rejected by the gate).
     pub applied: bool,
+    /// The innovation covariance `S = H P- H^T + V R V^T` at the prior
+    /// (missing components: zero row and column, unit diagonal).
+    pub s: SMatrix<T, M, M>,
+    /// The gain `G = P- H^T S^-1` (zero columns for missing components).
+    /// Computed whether or not the gate applied the update, so a rejected
+    /// correction still shows what it would have done.
+    pub gain: SMatrix<T, N, M>,
 }
 
 /// The filter's configuration. Holds no estimate.
@@ -221,6 +228,8 @@ impl<T: Scalar> Ekf<T> {
                     nis,
                     dof,
                     applied: false,
+                    s,
+                    gain: pht * s_inv,
                 });
             }
         }
@@ -241,6 +250,8 @@ impl<T: Scalar> Ekf<T> {
                 nis,
                 dof,
                 applied: true,
+                s,
+                gain: g,
             });
         }
         Err(diagnose_correct(belief, model, z, mask).unwrap_or(Error::NonFinite(Input::Covariance)))
@@ -300,6 +311,12 @@ impl<T: Scalar> Ekf<T> {
                 .ok_or(Error::NoiseNotPositiveDefinite)?;
             (nu_d, h_d, SVector::<T, M>::repeat(T::one()))
         };
+        // S and the gain at the prior, for the caller (the scalar updates
+        // below never form them).
+        let s = mul_bt(&mul(&lin.h, &belief.p), &lin.h) + lin.r;
+        let gain = spd_inverse(&s)
+            .map(|s_inv| mul_bt(&belief.p, &lin.h) * s_inv)
+            .ok_or(Error::InnovationNotPositiveDefinite)?;
         let x0 = belief.x;
         let mut x = belief.x;
         let mut p = belief.p;
@@ -335,10 +352,12 @@ impl<T: Scalar> Ekf<T> {
                     nis,
                     dof: lin.dof,
                     applied: false,
+                    s,
+                    gain,
                 });
             }
         }
-        finish(x, p, lin.nu, nis, lin.dof)
+        finish(x, p, lin.nu, nis, lin.dof, s, gain)
     }
 }
 
@@ -466,6 +485,8 @@ fn finish<T: Scalar, const N: usize, const M: usize>(
     innovation: SVector<T, M>,
     nis: T,
     dof: u32,
+    s: SMatrix<T, M, M>,
+    gain: SMatrix<T, N, M>,
 ) -> Result<Correction<T, N, M>, Error> {
     if !all_finite(x.as_slice()) {
         return Err(Error::NonFinite(Input::State));
@@ -479,6 +500,8 @@ fn finish<T: Scalar, const N: usize, const M: usize>(
         nis,
         dof,
         applied: true,
+        s,
+        gain,
     })
 }
 

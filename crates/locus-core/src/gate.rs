@@ -2,7 +2,7 @@
 //!
 //! For a correction with innovation `y = z - h(X-)` (m components) and
 //! innovation covariance `S = H P- H^T + V R V^T` (spec
-//! `/work/shared/spec/MODELS.md` section 1), the normalised innovation squared
+//! `shared/spec/MODELS.md` section 1), the normalised innovation squared
 //! `NIS = y^T S^-1 y` is dimensionless and, when the filter is consistent and
 //! the measurement is not an outlier, chi-square distributed with `m` degrees
 //! of freedom. A gate at confidence `c` accepts the measurement when the NIS is
@@ -29,9 +29,18 @@ const TABLE_LEN: usize = 16;
 /// assert!(gate.accepts(3.0, 2));
 /// assert!(!gate.accepts(7.5, 2));
 /// ```
+///
+/// A gate can also be built from one precomputed threshold
+/// ([`ChiSquareGate::from_threshold`]), for a target that should not carry
+/// the quantile's special functions (the firmware computes its threshold on
+/// the host).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChiSquareGate<T> {
-    confidence: f64,
+    /// The confidence the table was computed at; `None` for a gate built
+    /// from one precomputed threshold.
+    confidence: Option<f64>,
+    /// Threshold for `dof = 1..=16`; NaN where unknown (a gate built from
+    /// one threshold knows only its own degrees of freedom).
     thresholds: [T; TABLE_LEN],
 }
 
@@ -55,14 +64,51 @@ impl<T: Scalar> ChiSquareGate<T> {
             *t = cast(chi2::quantile(confidence, dof)?);
         }
         Ok(Self {
-            confidence,
+            confidence: Some(confidence),
             thresholds,
         })
     }
 
-    /// The confidence level the gate was built with, in `(0, 1)`.
+    /// A gate for measurements of `dof` components (1 to 16) with a
+    /// precomputed NIS threshold, e.g. `chi2::quantile(c, dof)` computed
+    /// on a host and rounded to `T`. It accepts exactly what a gate from
+    /// [`ChiSquareGate::new`] whose table holds that threshold accepts; a
+    /// measurement of any other number of components is rejected (the gate
+    /// has no threshold for it).
+    ///
+    /// ```
+    /// # use locus_core::ChiSquareGate;
+    /// let table = ChiSquareGate::<f32>::new(0.99).unwrap();
+    /// let fixed = ChiSquareGate::<f32>::from_threshold(2, table.threshold(2)).unwrap();
+    /// assert_eq!(fixed.accepts(9.0, 2), table.accepts(9.0, 2));
+    /// assert!(!fixed.accepts(0.1, 1));
+    /// ```
+    ///
+    /// # Errors
+    ///
+    /// [`Error::InvalidParameter`] unless `dof` is in `1..=16` and
+    /// `threshold` is positive (`+infinity` allowed: accept everything).
+    pub fn from_threshold(dof: usize, threshold: T) -> Result<Self, Error> {
+        if !(1..=TABLE_LEN).contains(&dof) {
+            return Err(Error::InvalidParameter(
+                "gate degrees of freedom must be in 1..=16",
+            ));
+        }
+        if threshold.partial_cmp(&T::zero()) != Some(core::cmp::Ordering::Greater) {
+            return Err(Error::InvalidParameter("gate threshold must be > 0"));
+        }
+        let mut thresholds = [cast::<T>(f64::NAN); TABLE_LEN];
+        thresholds[dof - 1] = threshold;
+        Ok(Self {
+            confidence: None,
+            thresholds,
+        })
+    }
+
+    /// The confidence level the gate was built with, in `(0, 1)`; `None`
+    /// for a gate built from a precomputed threshold.
     #[must_use]
-    pub fn confidence(&self) -> f64 {
+    pub fn confidence(&self) -> Option<f64> {
         self.confidence
     }
 
@@ -72,17 +118,21 @@ impl<T: Scalar> ChiSquareGate<T> {
     /// `dof` in `1..=16` is read from the precomputed table; larger values are
     /// computed on the fly (no allocation; a few microseconds for moderate
     /// `dof`). `dof = 0` (nothing measured, so nothing to gate) returns
-    /// `+infinity`, i.e. any non-NaN NIS is accepted.
+    /// `+infinity`, i.e. any non-NaN NIS is accepted. A gate built from one
+    /// threshold returns NaN (nothing passes) for any other `dof >= 1`.
     #[must_use]
     pub fn threshold(&self, dof: usize) -> T {
         match dof {
             0 => cast(f64::INFINITY),
             1..=TABLE_LEN => self.thresholds[dof - 1],
-            _ => {
-                let dof = u32::try_from(dof).unwrap_or(u32::MAX);
-                // Cannot fail: confidence was validated in `new` and dof >= 17.
-                cast(chi2::quantile(self.confidence, dof).unwrap_or(f64::INFINITY))
-            }
+            _ => match self.confidence {
+                Some(confidence) => {
+                    let dof = u32::try_from(dof).unwrap_or(u32::MAX);
+                    // Cannot fail: confidence was validated in `new` and dof >= 17.
+                    cast(chi2::quantile(confidence, dof).unwrap_or(f64::INFINITY))
+                }
+                None => cast(f64::NAN),
+            },
         }
     }
 
@@ -107,8 +157,8 @@ mod tests {
     fn thresholds_match_quantiles() {
         let g64 = ChiSquareGate::<f64>::new(0.99).unwrap();
         let g32 = ChiSquareGate::<f32>::new(0.99).unwrap();
-        assert_eq!(g64.confidence(), 0.99);
-        assert_eq!(g32.confidence(), 0.99);
+        assert_eq!(g64.confidence(), Some(0.99));
+        assert_eq!(g32.confidence(), Some(0.99));
         for dof in 1..=40usize {
             let q = chi2::quantile(0.99, dof as u32).unwrap();
             assert_eq!(g64.threshold(dof), q, "f64 threshold, dof {dof}");
@@ -154,6 +204,32 @@ mod tests {
             );
             assert!(ChiSquareGate::<f32>::new(c).is_err());
         }
+    }
+
+    #[test]
+    fn from_threshold_matches_the_table_for_its_dof_only() {
+        let table = ChiSquareGate::<f32>::new(0.99).unwrap();
+        let fixed = ChiSquareGate::<f32>::from_threshold(2, table.threshold(2)).unwrap();
+        assert_eq!(fixed.confidence(), None);
+        let t = table.threshold(2);
+        for nis in [
+            0.0,
+            t * 0.5,
+            t,
+            f32::from_bits(t.to_bits() + 1),
+            1e30,
+            f32::NAN,
+        ] {
+            assert_eq!(fixed.accepts(nis, 2), table.accepts(nis, 2), "nis {nis}");
+        }
+        for dof in [1, 3, 16, 17, 40] {
+            assert!(!fixed.accepts(0.0, dof), "dof {dof} has no threshold");
+        }
+        assert!(fixed.accepts(1e30, 0));
+        for (dof, t) in [(0, 1.0), (17, 1.0), (2, 0.0), (2, -1.0), (2, f32::NAN)] {
+            assert!(ChiSquareGate::<f32>::from_threshold(dof, t).is_err());
+        }
+        assert!(ChiSquareGate::<f32>::from_threshold(2, f32::INFINITY).is_ok());
     }
 
     #[test]

@@ -11,6 +11,8 @@ pub mod gate;
 pub mod jacobian_check;
 mod linalg;
 pub mod model;
+pub mod pose;
+pub mod running;
 pub mod schedule;
 
 pub use belief::Belief;
@@ -19,6 +21,8 @@ pub use ekf::{Correction, CovarianceUpdate, Ekf, Mask};
 pub use error::{Error, Input};
 pub use gate::ChiSquareGate;
 pub use model::{MeasurementModel, MotionModel};
+pub use pose::Pose;
+pub use running::{Event, Placement, Recovery, Rules, RunningFilter, Track, Update, nees};
 
 /// Re-export of the linear-algebra crate the core is built on, so that users
 /// name exactly the same `SVector`/`SMatrix` types.
