@@ -10,6 +10,7 @@ pub mod laser_wall;
 pub mod observer;
 pub mod range_bearing;
 pub mod skid_steer;
+pub mod square001;
 pub mod tricycle;
 pub mod unicycle;
 
@@ -21,6 +22,7 @@ pub use laser_wall::{BeamLimits, LaserMount, LaserRange, LaserWallPaper, Segment
 pub use observer::{ContinuousObserver, ObserverState};
 pub use range_bearing::RangeBearing;
 pub use skid_steer::{SkidSteer, TreadSpeeds};
+pub use square001::{IrAssociation, IrOutcome, Localiser, Odometer};
 pub use tricycle::{
     CountNoise, FrontReading, RearCounts, TricycleFront, TricycleRear, counts_per_rev,
 };

@@ -1,0 +1,251 @@
+//! Paper 001's localisation loop, once: encoder counts -> wheel travel ->
+//! prediction ([`DiffDrive`], eq. 7-13) -> IR pair -> wall association
+//! ([`associate_ir_wall`]) -> correction ([`IrPairObservation`], eq. 3-5,
+//! 17-20) behind the gate of the [`RunningFilter`].
+//!
+//! The simulator, the robot-link host, the firmware, `locus demo` and the
+//! teaching UI all run [`Localiser`]; they differ only in where the counts
+//! and readings come from.
+//!
+//! * [`Odometer`]: wrapping encoder counts (of a counter `bits` wide: 20 on
+//!   paper 004's decoder, 32 on the robot link) -> signed count differences
+//!   -> wheel travels `d1` (right), `d2` (left) in m (paper 001 eq. 9:
+//!   `d_i = counts_i dP`).
+//! * [`IrAssociation`]: the IR pair's mounting, the association range and
+//!   `R`; turns a reading `[d_s1, d_s2]` (m) into an observation of the wall
+//!   the estimate's sensing ray hits, or `None` (dropped).
+
+use locus_core::{Ekf, Error, Recovery, Rules, RunningFilter, Scalar, Update};
+use locus_odometry::{Real, Wheel, wrapping_diff};
+
+use crate::{DiffDrive, IrPair, IrPairObservation, Segment, WheelTravel, associate_ir_wall};
+
+/// Encoder counts -> wheel travels, wrap-safe.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Odometer<T> {
+    wheel: Wheel<T>,
+    bits: u32,
+    last: Option<[u32; 2]>,
+}
+
+impl<T: Scalar + Real> Odometer<T> {
+    /// An odometer for counters `bits` wide (1..=32) on wheels `wheel`,
+    /// with no reference yet: the first counts only set it.
+    pub fn new(wheel: Wheel<T>, bits: u32) -> Self {
+        Self {
+            wheel,
+            bits,
+            last: None,
+        }
+    }
+
+    /// The same odometer with reference counts `[right, left]` (e.g. a
+    /// decoder's counts at the start of a run).
+    #[must_use]
+    pub fn with_reference(mut self, counts: [u32; 2]) -> Self {
+        self.last = Some(counts);
+        self
+    }
+
+    /// The wheels' encoder.
+    pub fn wheel(&self) -> &Wheel<T> {
+        &self.wheel
+    }
+
+    /// The wheel travels (m) since the last counts `[right, left]`, or
+    /// `None` for the first counts (they become the reference). A count
+    /// difference is the shortest way round the counter (`wrapping_diff`),
+    /// so a counter that wraps between two readings costs nothing.
+    pub fn travel(&mut self, counts: [u32; 2]) -> Option<WheelTravel<T>> {
+        let last = self.last.replace(counts)?;
+        Some(WheelTravel {
+            d1: self
+                .wheel
+                .distance(wrapping_diff(counts[0], last[0], self.bits)),
+            d2: self
+                .wheel
+                .distance(wrapping_diff(counts[1], last[1], self.bits)),
+        })
+    }
+}
+
+/// IR pair readings -> an observation of the wall they see.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IrAssociation<T> {
+    /// The pair's mounting.
+    pub pair: IrPair<T>,
+    /// Largest estimated pair-to-wall distance accepted (m).
+    pub range: T,
+    /// `R11 = var(e_ds1)`, m^2.
+    pub r11: T,
+    /// `R22 = var(e_ds2)`, m^2.
+    pub r22: T,
+}
+
+impl<T: Scalar> IrAssociation<T> {
+    /// The observation of the readings `[d_s1, d_s2]` (m) at the estimate
+    /// `x` (`[x, y, theta]`): the axis-aligned wall of `walls` that the
+    /// pair's sensing ray hits within [`IrAssociation::range`], or `None`
+    /// (no such wall: the reading is dropped).
+    pub fn observe(
+        &self,
+        x: &locus_core::nalgebra::Vector3<T>,
+        walls: &[Segment<T>],
+        [ds1, ds2]: [T; 2],
+    ) -> Option<IrPairObservation<T>> {
+        let wall = associate_ir_wall(x, &self.pair, walls, self.range)?;
+        Some(IrPairObservation {
+            pair: self.pair,
+            wall,
+            ds1,
+            ds2,
+            r11: self.r11,
+            r22: self.r22,
+        })
+    }
+}
+
+/// What an IR reading did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum IrOutcome<T: Scalar> {
+    /// No wall in range along the sensing ray: dropped.
+    Unassociated,
+    /// Associated: the observation and what the filter did with it.
+    Associated {
+        /// The observation (wall, readings, `R`).
+        observation: IrPairObservation<T>,
+        /// Applied (NIS, `S`, gain), gated, or no measurement.
+        update: Update<T, 3, 2>,
+    },
+}
+
+impl<T: Scalar> IrOutcome<T> {
+    /// Whether the reading corrected the belief.
+    pub fn applied(&self) -> bool {
+        matches!(self, IrOutcome::Associated { update, .. } if update.applied())
+    }
+}
+
+/// Paper 001's running localiser: the running filter, the drive model, the
+/// odometer and the IR association.
+#[derive(Debug, Clone)]
+pub struct Localiser<T: Scalar> {
+    /// The running filter (belief, gate, consistency monitor).
+    pub filter: RunningFilter<T, 3>,
+    /// The differential-drive model (wheelbase, `Q`).
+    pub model: DiffDrive<T>,
+    /// Counts -> wheel travels.
+    pub odometer: Odometer<T>,
+    /// Readings -> observations.
+    pub ir: IrAssociation<T>,
+}
+
+impl<T: Scalar + Real> Localiser<T> {
+    /// A localiser starting from `belief`.
+    pub fn new(
+        ekf: Ekf<T>,
+        belief: locus_core::Belief<T, 3>,
+        model: DiffDrive<T>,
+        odometer: Odometer<T>,
+        ir: IrAssociation<T>,
+    ) -> Self {
+        Self {
+            filter: RunningFilter::start(Rules::new(ekf), belief, ()),
+            model,
+            odometer,
+            ir,
+        }
+    }
+
+    /// The same localiser with a gate recovery policy.
+    #[must_use]
+    pub fn with_recovery(mut self, recovery: Recovery<T>) -> Self {
+        let rules = self.filter.rules().with_recovery(recovery);
+        self.filter.set_rules(rules);
+        self
+    }
+
+    /// The belief now.
+    pub fn belief(&self) -> &locus_core::Belief<T, 3> {
+        self.filter.belief()
+    }
+
+    /// Prediction with the wheel travels `u` (eq. 7-13).
+    ///
+    /// # Errors
+    /// As [`Ekf::predict`]; the belief is then unchanged.
+    #[inline(always)]
+    pub fn predict(&mut self, u: &WheelTravel<T>) -> Result<(), Error> {
+        self.filter.predict(&self.model, u)
+    }
+
+    /// New encoder counts `[right, left]`: the wheel travels since the last
+    /// ones, predicted in `parts` equal steps (the robot link predicts
+    /// through lost packets this way; 1 otherwise). `Ok(None)` for the
+    /// first counts, which only set the odometer's reference.
+    ///
+    /// # Errors
+    /// As [`Ekf::predict`]; the belief is then unchanged (a failure on a
+    /// later part keeps the earlier parts' prediction).
+    pub fn counts(
+        &mut self,
+        counts: [u32; 2],
+        parts: u32,
+    ) -> Result<Option<WheelTravel<T>>, Error> {
+        let Some(total) = self.odometer.travel(counts) else {
+            return Ok(None);
+        };
+        let n: T = locus_core::cast(f64::from(parts.max(1)));
+        let u = if parts > 1 {
+            WheelTravel {
+                d1: total.d1 / n,
+                d2: total.d2 / n,
+            }
+        } else {
+            total
+        };
+        for _ in 0..parts.max(1) {
+            self.predict(&u)?;
+        }
+        Ok(Some(total))
+    }
+
+    /// An IR reading `[d_s1, d_s2]` (m) of the walls `walls`: associated on
+    /// the current (predicted) estimate, then the correction behind the
+    /// gate.
+    ///
+    /// # Errors
+    /// As [`Ekf::correct`]; the belief is then unchanged.
+    #[inline]
+    pub fn ir(&mut self, walls: &[Segment<T>], readings: [T; 2]) -> Result<IrOutcome<T>, Error> {
+        let Some(observation) = self.ir.observe(&self.filter.belief().x, walls, readings) else {
+            return Ok(IrOutcome::Unassociated);
+        };
+        let update = self.filter.correct(&observation, &observation.z())?;
+        Ok(IrOutcome::Associated {
+            observation,
+            update,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_wrap_and_split() {
+        let wheel = Wheel::new(90, 1.0, 0.028);
+        let mut o = Odometer::<f64>::new(wheel, 20);
+        assert_eq!(o.travel([5, 7]), None);
+        // The 20-bit counter wraps: 3 -> (2^20 - 2) is 5 counts back.
+        let mut o = Odometer::<f64>::new(wheel, 20).with_reference([(1 << 20) - 2, 3]);
+        let u = o.travel([3, (1 << 20) - 2]).unwrap();
+        assert_eq!(u.d1, wheel.distance(5));
+        assert_eq!(u.d2, wheel.distance(-5));
+        // 32-bit link counters: the same through u32 wrapping.
+        let mut o = Odometer::<f64>::new(wheel, 32).with_reference([u32::MAX, 0]);
+        let u = o.travel([1, u32::MAX]).unwrap();
+        assert_eq!((u.d1, u.d2), (wheel.distance(2), wheel.distance(-1)));
+    }
+}
