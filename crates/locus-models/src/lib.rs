@@ -22,7 +22,7 @@ pub use laser_wall::{BeamLimits, LaserMount, LaserRange, LaserWallPaper, Segment
 pub use observer::{ContinuousObserver, ObserverState};
 pub use range_bearing::RangeBearing;
 pub use skid_steer::{SkidSteer, TreadSpeeds};
-pub use square001::{IrAssociation, IrOutcome, Localiser, Odometer};
+pub use square001::{IrAssociation, IrOutcome, Localiser, LocaliserConfig, Odometer};
 pub use tricycle::{
     CountNoise, FrontReading, RearCounts, TricycleFront, TricycleRear, counts_per_rev,
 };

@@ -105,6 +105,81 @@ impl<T: Scalar> IrAssociation<T> {
     }
 }
 
+/// What paper 001's localiser needs to know of the robot and the filter
+/// (SI units; variances per filter step). The simulator's `SquareConfig`
+/// and the robot-link host build their [`Localiser`] from it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LocaliserConfig<T> {
+    /// Distance between the wheels `b`, m.
+    pub wheelbase: T,
+    /// Wheel radius `R`, m.
+    pub wheel_radius: T,
+    /// Encoder lines per shaft revolution `N` (x4 decoding).
+    pub encoder_lines: u32,
+    /// Encoder-shaft revolutions per wheel revolution `G`.
+    pub encoder_gear: T,
+    /// Width of the encoder counters the localiser receives, bits (20 for
+    /// paper 004's decoder, 32 on the robot link).
+    pub counter_bits: u32,
+    /// IR pair spacing `L`, m (pair centred on the robot).
+    pub ir_spacing: T,
+    /// Largest pair-to-wall distance accepted by the association, m.
+    pub association_range: T,
+    /// `Q11 = var(e_d)`, m^2 per step.
+    pub q11: T,
+    /// `Q22 = var(e_dtheta)`, rad^2 per step.
+    pub q22: T,
+    /// `R11 = var(e_ds1)`, m^2.
+    pub r11: T,
+    /// `R22 = var(e_ds2)`, m^2.
+    pub r22: T,
+    /// Chi-square gate confidence in (0, 1), or `None` for no gate.
+    pub gate_confidence: Option<f64>,
+    /// Initial estimate `[x, y, theta]`, m, m, rad.
+    pub start: [T; 3],
+    /// Standard deviations of the initial estimate, m, m, rad.
+    pub initial_std: [T; 3],
+}
+
+impl<T: Scalar + Real> LocaliserConfig<T> {
+    /// The localiser of this configuration, at its initial belief
+    /// `N(start, diag(initial_std^2))`, Joseph form, with the gate.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for a gate confidence outside (0, 1).
+    pub fn localiser(&self) -> Result<Localiser<T>, Error> {
+        let mut ekf = Ekf::<T>::default();
+        if let Some(c) = self.gate_confidence {
+            ekf = ekf.with_gate(locus_core::ChiSquareGate::new(c)?);
+        }
+        let [s0, s1, s2] = self.start;
+        let [d0, d1, d2] = self.initial_std;
+        let belief = locus_core::Belief::new(
+            locus_core::nalgebra::Vector3::new(s0, s1, s2),
+            locus_core::nalgebra::Matrix3::from_diagonal(&locus_core::nalgebra::Vector3::new(
+                d0 * d0,
+                d1 * d1,
+                d2 * d2,
+            )),
+        );
+        Ok(Localiser::new(
+            ekf,
+            belief,
+            DiffDrive::new(self.wheelbase, self.q11, self.q22),
+            Odometer::new(
+                Wheel::new(self.encoder_lines, self.encoder_gear, self.wheel_radius),
+                self.counter_bits,
+            ),
+            IrAssociation {
+                pair: IrPair::centred(self.ir_spacing),
+                range: self.association_range,
+                r11: self.r11,
+                r22: self.r22,
+            },
+        ))
+    }
+}
+
 /// What an IR reading did.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum IrOutcome<T: Scalar> {

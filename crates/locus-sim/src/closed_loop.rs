@@ -309,6 +309,29 @@ impl SquareConfig {
         (robot, true_start)
     }
 
+    /// The localiser's part of the configuration (robot geometry, encoder,
+    /// IR pair, `Q`, `R`, gate, initial belief), for counters
+    /// `counter_bits` wide (20: the simulated decoder; 32: the robot link).
+    #[must_use]
+    pub fn localiser(&self, counter_bits: u32) -> locus_models::LocaliserConfig<f64> {
+        locus_models::LocaliserConfig {
+            wheelbase: self.wheelbase,
+            wheel_radius: self.wheel_radius,
+            encoder_lines: self.encoder_lines,
+            encoder_gear: self.encoder_gear,
+            counter_bits,
+            ir_spacing: self.ir_spacing,
+            association_range: self.association_range,
+            q11: self.q11,
+            q22: self.q22,
+            r11: self.r11,
+            r22: self.r22,
+            gate_confidence: self.gate_confidence,
+            start: self.start,
+            initial_std: self.initial_std,
+        }
+    }
+
     /// The `square-ideal` scenario: the default configuration with
     /// [`NoiseModel::Ideal`] (simulated noise exactly as the filter's `Q` and
     /// `R` assume: no slip, no quantisation, no calibration error) and no
