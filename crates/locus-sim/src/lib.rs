@@ -14,7 +14,11 @@ pub mod firmware_data;
 pub mod guide;
 pub mod hover;
 pub mod robot;
-pub mod scenario;
+/// The evaluation types every scenario reports through (defined in
+/// `locus-eval`).
+pub mod scenario {
+    pub use locus_eval::{Record, Sample, Summary, Tally};
+}
 pub mod scenario_file;
 pub mod sensors;
 pub mod tricycle_slip;

@@ -1,12 +1,15 @@
-//! What every scenario of `locus run` has in common: the per-step [`Sample`]
-//! (truth, estimate, covariance, odometry alone, NEES, NIS) that the summary,
-//! the pictures and the Monte Carlo statistics are computed from, the
-//! [`Record`] trait of a scenario's CSV log, and the [`Summary`] built by a
-//! [`Tally`].
+//! Evaluation of a run against its ground truth, the same for a simulated
+//! scenario (`locus run`), a replayed log (`locus replay`) and the teaching
+//! UI: the per-step [`Sample`] (truth, estimate, covariance, odometry alone,
+//! NEES, NIS) that the summary, the pictures and the Monte Carlo statistics
+//! are computed from, the [`Record`] trait of a run's CSV log, the
+//! [`Summary`] built by a [`Tally`], and [`nees`], the one NEES.
 //!
-//! A scenario's runner (e.g. [`crate::closed_loop::run_square`]) simulates,
-//! filters, hands each step's record to a sink as the run goes, and returns
-//! the [`Summary`] of a [`Tally`] it fed with every step's [`Sample`].
+//! A runner (a simulator scenario, the replay) filters, hands each step's
+//! record to a sink as the run goes, and returns the [`Summary`] of a
+//! [`Tally`] it fed with every step's [`Sample`]. The summary serialises
+//! (serde) with every figure that cannot be computed as NaN, which
+//! `serde_json` writes as `null`.
 //!
 //! Units: SI (m, rad, s). Planar scenarios put `z = 0`; the 3-D `hover`
 //! scenario (paper 002) reports its body position in `position` and its
@@ -15,6 +18,15 @@
 use std::time::Instant;
 
 use locus_core::chi2;
+use locus_core::nalgebra::{SMatrix, SVector};
+
+/// The NEES `e^T P^-1 e` of an estimate with error `e` (truth minus
+/// estimate, angles wrapped) and covariance `P` ([`locus_core::nees`]);
+/// NaN ("n/a") when `P` is not positive definite.
+#[must_use]
+pub fn nees<const N: usize>(error: &SVector<f64, N>, p: &SMatrix<f64, N, N>) -> f64 {
+    locus_core::nees(error, p).unwrap_or(f64::NAN)
+}
 
 /// The common per-step figures of any scenario.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -78,7 +90,7 @@ pub trait Record {
 }
 
 /// Summary of a run. Errors are against the truth.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Summary {
     /// Steps simulated.
     pub steps: usize,
