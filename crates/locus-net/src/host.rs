@@ -1,8 +1,9 @@
 //! The localisation and control host for any robot that speaks the
 //! protocol (`docs/protocol.md`).
 //!
-//! The filter is paper 001's, configured by a [`SquareConfig`] (wheelbase,
-//! encoder, IR pair, `Q`, `R`, gate, path controller): the same steps as
+//! The filter is paper 001's [`Localiser`] on the link's 32-bit wrapping
+//! encoder counts, configured by a [`SquareConfig`] (wheelbase, encoder,
+//! IR pair, `Q`, `R`, gate, path controller): the loop of
 //! [`locus_sim::closed_loop::run_square`], with the robot across a socket.
 //!
 //! # Loop
@@ -11,11 +12,12 @@
 //! 2. For each datagram from the robot's address: decode and classify it
 //!    ([`Receiver`]). Dropped classes (duplicate, late, corrupt, malformed)
 //!    only count. The first applied packet sets the reference encoder
-//!    counts. Every later one: the wrapping count differences give the
-//!    wheel travels since the last applied packet; with `g` sequence
-//!    numbers skipped they are split into `g + 1` equal predictions
-//!    (predicting through the gap); the IR reading, if any, is associated
-//!    with a wall and corrects the EKF (gated); the clock estimator gets
+//!    counts. Every later one: the count differences give the wheel
+//!    travels since the last applied packet; with `g` sequence numbers
+//!    skipped they are split into `g + 1` equal predictions (predicting
+//!    through the gap, [`Localiser::counts`]); the IR reading, if any, is
+//!    associated with a wall and corrects the filter behind its gate
+//!    ([`Localiser::ir`]); the clock estimator gets
 //!    (robot timestamp, receive time).
 //! 3. The path controller maps the estimate to wheel speeds; a command
 //!    acknowledging the packet is sent. When the laps are done the host
@@ -28,14 +30,9 @@ use std::net::UdpSocket;
 use std::time::Instant;
 
 use locus_control::{Controller, FollowPath, wheel_speeds};
-use locus_core::nalgebra::{Matrix3, Vector3};
-use locus_core::{Belief, ChiSquareGate, Ekf};
 use locus_link::clock::ClockFit;
-use locus_link::{
-    ClockEstimator, Command, Counters, MAX_PACKET, NO_ACK, Receiver, Status, Telemetry,
-};
-use locus_models::{DiffDrive, IrPair, IrPairObservation, WheelTravel, associate_ir_wall};
-use locus_odometry::Wheel as EncoderWheel;
+use locus_link::{ClockEstimator, Command, Counters, MAX_PACKET, NO_ACK, Receiver, Status};
+use locus_models::Localiser;
 use locus_sim::closed_loop::SquareConfig;
 use locus_sim::world::World;
 
@@ -43,6 +40,9 @@ use crate::{Error, at_least_1us, is_timeout};
 
 /// Buckets in the clock estimator's window.
 const CLOCK_WINDOW: usize = 64;
+
+/// Width of the link's encoder counts (bits): they wrap modulo `2^32`.
+const COUNTER_BITS: u32 = 32;
 
 /// Configuration of the host.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -116,84 +116,6 @@ pub struct HostReport {
     pub latency: Vec<f64>,
 }
 
-/// The filter side of the loop.
-struct Filter {
-    cfg: SquareConfig,
-    ekf: Ekf<f64>,
-    model: DiffDrive<f64>,
-    wheel: EncoderWheel<f64>,
-    pair: IrPair<f64>,
-    world: World,
-    belief: Belief<f64, 3>,
-    reference: Option<[u32; 2]>,
-}
-
-impl Filter {
-    fn new(cfg: &SquareConfig) -> Result<Self, Error> {
-        cfg.validate()?;
-        let mut ekf = Ekf::<f64>::default();
-        if let Some(c) = cfg.gate_confidence {
-            ekf = ekf.with_gate(ChiSquareGate::new(c)?);
-        }
-        let (s, sd) = (cfg.start, cfg.initial_std);
-        let x0 = Vector3::new(s[0], s[1], s[2]);
-        let p0 = Matrix3::from_diagonal(&Vector3::new(sd[0] * sd[0], sd[1] * sd[1], sd[2] * sd[2]));
-        Ok(Self {
-            cfg: *cfg,
-            ekf,
-            model: DiffDrive::new(cfg.wheelbase, cfg.q11, cfg.q22),
-            wheel: EncoderWheel::new(cfg.encoder_lines, cfg.encoder_gear, cfg.wheel_radius),
-            pair: IrPair::centred(cfg.ir_spacing),
-            world: World::square_arena(),
-            belief: Belief::new(x0, p0),
-            reference: None,
-        })
-    }
-
-    /// Applies one telemetry packet that skipped `skipped` sequence
-    /// numbers; returns whether an IR correction was applied.
-    #[allow(clippy::cast_possible_wrap)]
-    fn apply(&mut self, t: &Telemetry, skipped: u32) -> Result<bool, Error> {
-        let Some(reference) = self.reference.replace(t.counts) else {
-            return Ok(false);
-        };
-        let d = |i: usize| {
-            self.wheel
-                .distance(t.counts[i].wrapping_sub(reference[i]) as i32)
-        };
-        let parts = f64::from(skipped) + 1.0;
-        let u = WheelTravel {
-            d1: d(0) / parts,
-            d2: d(1) / parts,
-        };
-        for _ in 0..=skipped {
-            self.belief = self.ekf.predict(&self.belief, &self.model, &u)?;
-        }
-        let Some([ds1, ds2]) = t.ir.filter(|_| self.cfg.use_ir) else {
-            return Ok(false);
-        };
-        let Some(wall) = associate_ir_wall(
-            &self.belief.x,
-            &self.pair,
-            &self.world.walls,
-            self.cfg.association_range,
-        ) else {
-            return Ok(false);
-        };
-        let obs = IrPairObservation {
-            pair: self.pair,
-            wall,
-            ds1: f64::from(ds1),
-            ds2: f64::from(ds2),
-            r11: self.cfg.r11,
-            r22: self.cfg.r22,
-        };
-        let c = self.ekf.correct(&self.belief, &obs, &obs.z())?;
-        self.belief = c.belief;
-        Ok(c.applied)
-    }
-}
-
 /// Runs the host on `socket`, talking to the robot at `robot`, calling
 /// `on_step` after each applied telemetry packet.
 ///
@@ -207,7 +129,9 @@ pub fn run_host(
     cfg: &HostConfig,
     on_step: &mut impl FnMut(&HostStep),
 ) -> Result<HostReport, Error> {
-    let mut filter = Filter::new(&cfg.square)?;
+    cfg.square.validate()?;
+    let mut localiser: Localiser<f64> = cfg.square.localiser(COUNTER_BITS).localiser()?;
+    let walls = World::square_arena().walls;
     let mut controller = FollowPath::square(cfg.square.control);
     let mut receiver = Receiver::new();
     let mut clock = ClockEstimator::<CLOCK_WINDOW>::new(cfg.clock_bucket);
@@ -290,9 +214,19 @@ pub fn run_host(
         };
         let robot_time = t.timestamp_us as f64 * 1e-6;
         clock.push(robot_time, (received - origin).as_secs_f64());
-        let corrected = filter.apply(&t, skipped)?;
+        // Predicting through the gap; the first applied packet only sets
+        // the reference counts (and its reading is not used).
+        let predicted = localiser
+            .counts(t.counts, skipped.saturating_add(1))?
+            .is_some();
+        let corrected = match t.ir.filter(|_| predicted && cfg.square.use_ir) {
+            Some([ds1, ds2]) => localiser
+                .ir(&walls, [f64::from(ds1), f64::from(ds2)])?
+                .applied(),
+            None => false,
+        };
         report.corrections += u64::from(corrected);
-        let x = filter.belief.x;
+        let x = localiser.belief().x;
         report.estimates.push((t.sequence, [x[0], x[1], x[2]]));
 
         let mut sent = None;
@@ -317,7 +251,7 @@ pub fn run_host(
                 sent = Some([right, left]);
             }
         }
-        let p = filter.belief.p;
+        let p = localiser.belief().p;
         on_step(&HostStep {
             sequence: t.sequence,
             robot_time,
