@@ -6,22 +6,17 @@
 //! `locus_analysis::doa`.
 
 use std::path::{Path, PathBuf};
-use std::sync::Once;
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow};
 use clap::Subcommand;
 use comfy_table::{Table, presets::UTF8_FULL};
 use indicatif::{ProgressBar, ProgressStyle};
-use locus_analysis::doa::{DoaConfig, DoaResult, Shard, Study, merge};
+use locus_analysis::doa::{CellResult, DoaConfig, DoaResult, Shard, Study, merge};
 use plotters::prelude::*;
-use plotters::style::FontStyle;
 
-/// DejaVu Sans, embedded (the binary's `assets/fonts`).
-const FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
-
-/// The font family of the DOA pictures (registered under its own name).
-const FAMILY: &str = "locus-doa-sans";
+use crate::font::{self, FAMILY};
+use crate::plot::{err, on_backend};
 
 /// Arguments of `locus doa`.
 #[derive(clap::Args, Debug)]
@@ -238,55 +233,49 @@ fn report(result: &DoaResult, out: &Path, no_plots: bool) -> Result<()> {
     if no_plots {
         return Ok(());
     }
-    let m: Vec<Vec<Option<f64>>> = (0..v_g.len())
-        .map(|i| {
-            (0..alpha.len())
-                .map(|j| result.get(i, j).map(|r| r.m_zeta))
-                .collect()
-        })
-        .collect();
-    let s: Vec<Vec<Option<f64>>> = (0..v_g.len())
-        .map(|i| {
-            (0..alpha.len())
-                .map(|j| result.get(i, j).and_then(|r| r.settle))
-                .collect()
-        })
-        .collect();
+    // One figure per cell, `None` where the grid has no value.
+    let grid = |value: &dyn Fn(&CellResult) -> Option<f64>| -> Vec<Vec<Option<f64>>> {
+        (0..v_g.len())
+            .map(|i| {
+                (0..alpha.len())
+                    .map(|j| result.get(i, j).and_then(value))
+                    .collect()
+            })
+            .collect()
+    };
+    let m = grid(&|r| Some(r.m_zeta));
+    let s = grid(&|r| r.settle);
+    font::register()?;
     for ext in ["png", "svg"] {
-        let p = out.join(format!("doa_m_zeta.{ext}"));
-        heatmap(
-            &p,
-            "Domain of attraction M_zeta (m, rad), paper 002 Fig. 4",
-            &m,
-            &v_g,
-            &alpha,
-            2,
-        )?;
-        let p2 = out.join(format!("doa_settling_time.{ext}"));
-        heatmap(
-            &p2,
-            "Worst settling time (s) at m_zeta = 0.1, paper 002 Fig. 5 (blank: not converged)",
-            &s,
-            &v_g,
-            &alpha,
-            3,
-        )?;
+        for (name, title, values, decimals) in [
+            (
+                "doa_m_zeta",
+                "Domain of attraction M_zeta (m, rad), paper 002 Fig. 4",
+                &m,
+                2,
+            ),
+            (
+                "doa_settling_time",
+                "Worst settling time (s) at m_zeta = 0.1, paper 002 Fig. 5 (blank: not converged)",
+                &s,
+                3,
+            ),
+        ] {
+            let path = out.join(format!("{name}.{ext}"));
+            on_backend!(
+                ext,
+                &path,
+                HEATMAP_SIZE,
+                draw_heatmap(title, values, &v_g, &alpha, decimals)
+            )
+            .with_context(|| format!("writing {}", path.display()))?;
+        }
     }
     println!(
         "wrote {0}/doa_m_zeta.{{png,svg}} and {0}/doa_settling_time.{{png,svg}}",
         out.display()
     );
     Ok(())
-}
-
-fn register_font() -> Result<()> {
-    static ONCE: Once = Once::new();
-    let mut result = Ok(());
-    ONCE.call_once(|| {
-        result = plotters::style::register_font(FAMILY, FontStyle::Normal, FONT)
-            .map_err(|_| anyhow!("the embedded DejaVu Sans font is invalid"));
-    });
-    result
 }
 
 /// A perceptually ordered colour map (viridis, 5 anchors, linear between).
@@ -309,33 +298,11 @@ fn viridis(t: f64) -> RGBColor {
     )
 }
 
-/// A heatmap of `values[i_vg][i_alpha]` (rows v_g upwards, columns alpha),
-/// each cell labelled with its value; PNG or SVG by extension.
-fn heatmap(
-    path: &Path,
-    title: &str,
-    values: &[Vec<Option<f64>>],
-    v_g: &[f64],
-    alpha: &[f64],
-    decimals: usize,
-) -> Result<()> {
-    register_font()?;
-    let size = (1400, 760);
-    let is_svg = path.extension().is_some_and(|e| e == "svg");
-    if is_svg {
-        let root = SVGBackend::new(path, size).into_drawing_area();
-        draw_heatmap(&root, title, values, v_g, alpha, decimals)?;
-        root.present()
-            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
-    } else {
-        let root = BitMapBackend::new(path, size).into_drawing_area();
-        draw_heatmap(&root, title, values, v_g, alpha, decimals)?;
-        root.present()
-            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
-    }
-    Ok(())
-}
+/// Size of a heatmap picture (pixels).
+const HEATMAP_SIZE: (u32, u32) = (1400, 760);
 
+/// A heatmap of `values[i_vg][i_alpha]` (rows v_g upwards, columns alpha),
+/// each cell labelled with its value.
 fn draw_heatmap<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
     title: &str,
@@ -343,11 +310,7 @@ fn draw_heatmap<DB: DrawingBackend>(
     v_g: &[f64],
     alpha: &[f64],
     decimals: usize,
-) -> Result<()>
-where
-    DB::ErrorType: 'static,
-{
-    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing: {e:?}");
+) -> Result<()> {
     root.fill(&WHITE).map_err(err)?;
     let (nv, na) = (v_g.len(), alpha.len());
     let max = values
@@ -413,5 +376,6 @@ where
             }
         }
     }
+    root.present().map_err(err)?;
     Ok(())
 }

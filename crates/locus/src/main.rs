@@ -5,6 +5,7 @@
 
 mod demo;
 mod doa;
+mod font;
 mod guide;
 mod host;
 mod hw;

@@ -2,26 +2,18 @@
 //! they work for every scenario: `map` (walls, true / estimated / odometry
 //! paths, covariance ellipses of the x-y block), `errors` (x, y, heading
 //! errors with +-3 sigma bands) and `covariance` (the variances over time,
-//! log scale), each as PNG and SVG.
-//!
-//! Text uses DejaVu Sans, embedded in the binary (`assets/fonts`, with its
-//! license) and registered with plotters, so no system font is needed.
+//! log scale), each as PNG and SVG; `nis` for a replay. Text uses the
+//! embedded font (`crate::font`).
 
 use std::path::{Path, PathBuf};
-use std::sync::Once;
 
 use anyhow::{Context, Result, anyhow};
 use locus_models::laser_wall::Segment;
 use locus_sim::scenario::Sample;
-use plotters::coord::Shift;
+use plotters::coord::{CoordTranslate, Shift};
 use plotters::prelude::*;
-use plotters::style::FontStyle;
 
-/// DejaVu Sans (Debian `fonts-dejavu-core`; license beside the file).
-const FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
-
-/// The font family every text uses.
-const FAMILY: &str = "sans-serif";
+use crate::font::{self, FAMILY};
 
 /// Picture size (pixels) of the time plots; the map is square.
 const SIZE: (u32, u32) = (1000, 700);
@@ -46,17 +38,6 @@ const ELLIPSE_EVERY: f64 = 10.0;
 #[must_use]
 pub fn ellipse_probability(k: f64) -> f64 {
     1.0 - (-k * k / 2.0).exp()
-}
-
-/// Registers the embedded font once.
-fn register_font() -> Result<()> {
-    static ONCE: Once = Once::new();
-    let mut result = Ok(());
-    ONCE.call_once(|| {
-        result = plotters::style::register_font(FAMILY, FontStyle::Normal, FONT)
-            .map_err(|_| anyhow!("the embedded DejaVu Sans font is invalid"));
-    });
-    result
 }
 
 /// Every `ceil(n / MAX_POINTS)`-th sample (and the last).
@@ -99,10 +80,33 @@ macro_rules! on_backend {
         }
     };
 }
+pub(crate) use on_backend;
 
 /// A plotters error as an anyhow error.
-fn err<E: core::fmt::Debug>(e: E) -> anyhow::Error {
+pub(crate) fn err<E: core::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow!("drawing: {e:?}")
+}
+
+/// A legend entry: a short line in `style`.
+fn legend_line(style: ShapeStyle) -> impl Fn((i32, i32)) -> PathElement<(i32, i32)> {
+    move |(x, y)| PathElement::new([(x, y), (x + 20, y)], style)
+}
+
+/// Draws the legend of `chart` at `position`: labels in `font_size` on a
+/// translucent white box.
+fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    font_size: u32,
+    position: SeriesLabelPosition,
+) -> Result<()> {
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font((FAMILY, font_size))
+        .position(position)
+        .draw()
+        .map_err(err)
 }
 
 /// The map: walls, paths and covariance ellipses.
@@ -165,9 +169,7 @@ fn draw_map<DB: DrawingBackend>(
         let series = LineSeries::new([(w.a[0], w.a[1]), (w.b[0], w.b[1])], wall_style);
         let drawn = chart.draw_series(series).map_err(err)?;
         if i == 0 {
-            drawn
-                .label(walls_label)
-                .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], wall_style));
+            drawn.label(walls_label).legend(legend_line(wall_style));
         }
     }
     let truth = RGBColor(0, 150, 0);
@@ -181,7 +183,7 @@ fn draw_map<DB: DrawingBackend>(
         ))
         .map_err(err)?
         .label("true path")
-        .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], truth.stroke_width(2)));
+        .legend(legend_line(truth.stroke_width(2)));
     chart
         .draw_series(LineSeries::new(
             thinned(samples).map(|s| (s.estimate[0], s.estimate[1])),
@@ -189,7 +191,7 @@ fn draw_map<DB: DrawingBackend>(
         ))
         .map_err(err)?
         .label("EKF estimate")
-        .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], est.stroke_width(2)));
+        .legend(legend_line(est.stroke_width(2)));
     if samples.iter().any(|s| s.odometry.is_some()) {
         chart
             .draw_series(LineSeries::new(
@@ -198,7 +200,7 @@ fn draw_map<DB: DrawingBackend>(
             ))
             .map_err(err)?
             .label("odometry alone")
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], odo.stroke_width(2)));
+            .legend(legend_line(odo.stroke_width(2)));
     }
     let mut next = 0.0;
     let mut ellipses = Vec::new();
@@ -227,17 +229,8 @@ fn draw_map<DB: DrawingBackend>(
         )
         .map_err(err)?
         .label(label)
-        .legend(move |(x, y)| {
-            PathElement::new([(x, y), (x + 20, y)], ellipse_color.stroke_width(2))
-        });
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font((FAMILY, 14))
-        .position(SeriesLabelPosition::MiddleMiddle)
-        .draw()
-        .map_err(err)?;
+        .legend(legend_line(ellipse_color.stroke_width(2)));
+    draw_legend(&mut chart, 14, SeriesLabelPosition::MiddleMiddle)?;
     root.present().map_err(err)?;
     Ok(())
 }
@@ -300,15 +293,8 @@ fn error_panel<DB: DrawingBackend>(
         ))
         .map_err(err)?
         .label(format!("{name} error (truth - EKF)"))
-        .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], line.stroke_width(2)));
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font((FAMILY, 13))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(err)?;
+        .legend(legend_line(line.stroke_width(2)));
+    draw_legend(&mut chart, 13, SeriesLabelPosition::UpperRight)?;
     Ok(())
 }
 
@@ -401,16 +387,9 @@ fn draw_covariance<DB: DrawingBackend>(
             ))
             .map_err(err)?
             .label(name)
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2)));
+            .legend(legend_line(color.stroke_width(2)));
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font((FAMILY, 14))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(err)?;
+    draw_legend(&mut chart, 14, SeriesLabelPosition::UpperRight)?;
     root.present().map_err(err)?;
     Ok(())
 }
@@ -435,7 +414,7 @@ pub fn write_all(
     if !(ellipse_sigma.is_finite() && ellipse_sigma > 0.0) {
         return Err(anyhow!("the ellipse level must be finite and > 0 sigma"));
     }
-    register_font()?;
+    font::register()?;
     let mut written = Vec::new();
     for ext in ["png", "svg"] {
         let map = dir.join(format!("map.{ext}"));
@@ -493,7 +472,7 @@ pub fn write_nis(dir: &Path, samples: &[Sample], title: &str) -> Result<Vec<Path
     if rows.is_empty() {
         return Err(anyhow!("no corrections to plot"));
     }
-    register_font()?;
+    font::register()?;
     let mut written = Vec::new();
     for ext in ["png", "svg"] {
         let path = dir.join(format!("nis.{ext}"));
@@ -554,19 +533,10 @@ fn draw_nis<DB: DrawingBackend>(
             ))
             .map_err(err)?;
         if !label.is_empty() {
-            s.label(label).legend(move |(x, y)| {
-                PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2))
-            });
+            s.label(label).legend(legend_line(color.stroke_width(2)));
         }
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font((FAMILY, 13))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(err)?;
+    draw_legend(&mut chart, 13, SeriesLabelPosition::UpperRight)?;
     root.present().map_err(err)?;
     Ok(())
 }
