@@ -5,7 +5,8 @@
 //!
 //! * **Time.** Odometry (commanded or measured `v`, `omega`, held from one
 //!   record to the next) and landmark sightings are merged in time order.
-//!   Each record is an *event*; between two events the filter predicts with
+//!   Each record is an *event*, kept in the history of Locus's running
+//!   filter ([`locus_core::RunningFilter`]); between two events it predicts with
 //!   the [`Unicycle`] model over the time between them. A sighting arrives
 //!   at [`Sighting::arrival`] (after the odometry up to that time); if it is
 //!   older than the filter's time, the replay goes back to the belief just
@@ -22,7 +23,8 @@
 //!   correction (sensor at the robot's centre). Sightings of landmarks not
 //!   in the map are counted and skipped; robot-to-robot sightings never
 //!   reach the replay (the MRCLAM log splits them off).
-//! * **Gating with recovery.** A chi-square gate ([`Config::gate`]) rejects
+//! * **Gating with recovery.** The running filter's chi-square gate
+//!   ([`Config::gate`]) rejects
 //!   outliers. A filter that has become over-confident would reject every
 //!   later sighting; so after [`Config::recover_after`] consecutive
 //!   rejections the covariance is multiplied by [`Config::inflation`] and
@@ -32,23 +34,22 @@
 //!   truth interpolated at its time (events where the truth has a gap wider
 //!   than [`Config::truth_max_gap`] or has ended are not compared), beside
 //!   dead reckoning from the same start with the same inputs. The
-//!   figures are accumulated by `locus-sim`'s [`Tally`] into its
+//!   figures are accumulated by `locus-eval`'s [`Tally`] into its
 //!   [`Summary`], so they read as `locus run`'s.
 //!
 //! Units: SI (m, rad, s); headings wrapped to (-pi, pi].
 
 pub mod log;
 
-extern crate alloc;
-
-use alloc::collections::VecDeque;
-
 use locus_core::nalgebra::{Matrix3, Vector2, Vector3};
-use locus_core::{Belief, ChiSquareGate, Ekf, MeasurementModel, MotionModel, wrap_angle};
+use locus_core::{
+    Belief, ChiSquareGate, Ekf, MotionModel, Recovery, Rules, RunningFilter, Track, Update,
+    wrap_angle,
+};
+use locus_eval::{Sample, Summary, Tally};
 use locus_logs::mrclam::{Odometry, Pose};
 use locus_models::range_bearing::RangeBearing;
 use locus_models::unicycle::{Unicycle, Velocities};
-use locus_sim::scenario::{Sample, Summary, Tally};
 
 pub use log::{Landmark, Log, Sighting};
 
@@ -348,11 +349,7 @@ impl Step {
         let t = self.truth?;
         let x = &self.belief.x;
         let e = Vector3::new(t.x - x[0], t.y - x[1], wrap_angle(t.theta - x[2]));
-        let nees = self
-            .belief
-            .p
-            .try_inverse()
-            .map_or(f64::NAN, |pi| (e.transpose() * pi * e)[0]);
+        let nees = locus_eval::nees(&e, &self.belief.p);
         let mut covariance = [[0.0; 3]; 3];
         for (i, row) in covariance.iter_mut().enumerate() {
             for (j, c) in row.iter_mut().enumerate() {
@@ -486,39 +483,111 @@ impl Event {
     }
 }
 
-/// The filter's state between events.
+/// What the replay carries beside the belief: the input in force (scaled)
+/// and dead reckoning from the same start with the same inputs.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct State {
-    belief: Belief<f64, 3>,
-    time: f64,
-    /// Scaled input in force.
+struct Carried {
     v: f64,
     omega: f64,
     dead: Vector3<f64>,
-    /// Consecutive gate rejections.
-    rejections: u32,
 }
 
+/// An event in the running filter's history, with what applying it did.
 #[derive(Debug, Clone, Copy)]
 struct Entry {
     event: Event,
-    after: State,
     outcome: Option<SightingOutcome>,
     inflations: u32,
     /// This event's term of [`Report::innovation_nll`].
     nll: f64,
 }
 
-/// The replay engine: a base state (final) and the history after it.
+impl locus_core::Event for Entry {
+    fn time(&self) -> f64 {
+        self.event.time()
+    }
+
+    fn order(&self, other: &Self) -> core::cmp::Ordering {
+        self.event.order(&other.event)
+    }
+}
+
+/// Events the history holds at most. The history is cut by time
+/// ([`Config::horizon`]); this bound only matters for a log with more than
+/// this many events within one horizon, whose oldest events then become
+/// final early.
+const HISTORY: usize = 1024;
+
+type Filter = RunningFilter<f64, 3, HISTORY, Entry, Carried>;
+type State = Track<f64, 3, Carried>;
+
+/// Advances `track` to `entry`'s time and applies it (the running filter's
+/// `apply`; deterministic, as a re-run needs).
+fn apply(
+    cfg: &Config,
+    log: &Log,
+    rules: &Rules<f64>,
+    track: &mut State,
+    entry: &mut Entry,
+) -> Result<(), locus_core::Error> {
+    let t = entry.event.time();
+    let dt = t - track.time;
+    if dt > 0.0 {
+        let model = Unicycle::new(cfg.q_v / dt, cfg.q_omega / dt);
+        let c = track.extra;
+        let u = Velocities {
+            v: c.v,
+            omega: c.omega,
+            dt,
+        };
+        track.predict(&rules.ekf, &model, &u)?;
+        track.extra.dead = model.f(&c.dead, &u, &Vector2::zeros());
+        track.time = t;
+    }
+    entry.inflations = 0;
+    entry.nll = 0.0;
+    entry.outcome = match entry.event {
+        Event::Odometry(o) => {
+            track.extra.v = o.v * cfg.v_scale;
+            track.extra.omega = o.omega * cfg.omega_scale;
+            None
+        }
+        Event::Sighting(z) => Some(match log.landmark(z.landmark) {
+            None => SightingOutcome::NotInMap,
+            Some(l) => {
+                let model = RangeBearing::new(
+                    Vector2::new(l.x, l.y),
+                    Vector2::zeros(),
+                    cfg.sigma_range,
+                    cfg.sigma_bearing,
+                );
+                let update = track.correct(rules, &model, &Vector2::new(z.range, z.bearing))?;
+                if let Some(first) = update.first_attempt() {
+                    entry.nll = 0.5 * first.s.determinant().ln() + 0.5 * first.nis.min(NIS_CAP);
+                }
+                entry.inflations = u32::from(update.inflated());
+                match update {
+                    Update::Applied { correction, first } => SightingOutcome::Applied {
+                        nis: correction.nis,
+                        recovered: first.is_some(),
+                    },
+                    Update::Gated { correction, .. } => SightingOutcome::Gated {
+                        nis: correction.nis,
+                    },
+                    Update::NoMeasurement => SightingOutcome::NoMeasurement,
+                }
+            }
+        }),
+    };
+    Ok(())
+}
+
+/// The replay engine: the running filter and what the report needs.
 struct Engine<'a, F: FnMut(&Step)> {
     cfg: Config,
-    ekf: Ekf<f64>,
     log: &'a Log,
     t0: f64,
-    base: State,
-    history: VecDeque<Entry>,
-    /// Scratch for re-runs.
-    rerun: Vec<Event>,
+    filter: Box<Filter>,
     next_index: usize,
     tally: Tally,
     report: Report,
@@ -526,133 +595,37 @@ struct Engine<'a, F: FnMut(&Step)> {
 }
 
 impl<F: FnMut(&Step)> Engine<'_, F> {
-    /// `state` advanced to `event`'s time and the event applied.
-    fn apply(&self, state: &State, event: &Event) -> Result<Entry, Error> {
-        let mut s = *state;
-        let t = event.time();
-        let dt = t - s.time;
-        let fail = |source| Error::Filter { time: t, source };
-        if dt > 0.0 {
-            let model = Unicycle::new(self.cfg.q_v / dt, self.cfg.q_omega / dt);
-            let u = Velocities {
-                v: s.v,
-                omega: s.omega,
-                dt,
-            };
-            s.belief = self.ekf.predict(&s.belief, &model, &u).map_err(fail)?;
-            s.dead = model.f(&s.dead, &u, &Vector2::zeros());
-            s.time = t;
-        }
-        let mut inflations = 0;
-        let mut nll = 0.0;
-        let outcome = match event {
-            Event::Odometry(o) => {
-                s.v = o.v * self.cfg.v_scale;
-                s.omega = o.omega * self.cfg.omega_scale;
-                None
-            }
-            Event::Sighting(z) => Some(match self.log.landmark(z.landmark) {
-                None => SightingOutcome::NotInMap,
-                Some(l) => {
-                    let model = RangeBearing::new(
-                        Vector2::new(l.x, l.y),
-                        Vector2::zeros(),
-                        self.cfg.sigma_range,
-                        self.cfg.sigma_bearing,
-                    );
-                    let zv = Vector2::new(z.range, z.bearing);
-                    let mut recovered = false;
-                    if model.h(&s.belief.x).is_some() {
-                        let h = model.jacobian(&s.belief.x);
-                        let cov = h * s.belief.p * h.transpose() + model.noise(&s.belief.x);
-                        nll = 0.5 * cov.determinant().ln();
-                    }
-                    let mut first = true;
-                    loop {
-                        let attempt = self.ekf.correct(&s.belief, &model, &zv);
-                        if first && let Ok(c) = &attempt {
-                            nll += 0.5 * c.nis.min(NIS_CAP);
-                        }
-                        first = false;
-                        match attempt {
-                            Ok(c) if c.applied => {
-                                s.belief = c.belief;
-                                s.rejections = 0;
-                                break SightingOutcome::Applied {
-                                    nis: c.nis,
-                                    recovered,
-                                };
-                            }
-                            Ok(c) => {
-                                s.rejections += 1;
-                                if s.rejections < self.cfg.recover_after || recovered {
-                                    break SightingOutcome::Gated { nis: c.nis };
-                                }
-                                // Possibly over-confident: widen once and
-                                // retry this sighting once. If it still does
-                                // not fit, the next rejected sighting widens
-                                // again, so the inflation compounds.
-                                s.belief.p *= self.cfg.inflation;
-                                inflations += 1;
-                                recovered = true;
-                            }
-                            Err(locus_core::Error::NoMeasurement) => {
-                                break SightingOutcome::NoMeasurement;
-                            }
-                            Err(e) => return Err(fail(e)),
-                        }
-                    }
-                }
-            }),
-        };
-        Ok(Entry {
-            event: *event,
-            after: s,
-            outcome,
-            inflations,
-            nll,
-        })
-    }
-
-    /// The state after the last event (or the base).
-    fn last(&self) -> State {
-        self.history.back().map_or(self.base, |e| e.after)
-    }
-
-    /// Inserts `event` at its place in canonical order, re-running the
-    /// history after it.
+    /// Inserts `event` at its place in canonical order (re-running the
+    /// history after it); reports an event made final to make room.
     fn insert(&mut self, event: Event) -> Result<(), Error> {
-        let p = self
-            .history
-            .partition_point(|e| e.event.order(&event) != core::cmp::Ordering::Greater);
-        if p == self.history.len() {
-            let entry = self.apply(&self.last(), &event)?;
-            self.history.push_back(entry);
-            return Ok(());
-        }
-        self.rerun.clear();
-        self.rerun.push(event);
-        self.rerun.extend(self.history.drain(p..).map(|e| e.event));
-        let mut state = self.last();
-        for i in 0..self.rerun.len() {
-            let entry = self.apply(&state, &self.rerun[i])?;
-            state = entry.after;
-            self.history.push_back(entry);
+        let entry = Entry {
+            event,
+            outcome: None,
+            inflations: 0,
+            nll: 0.0,
+        };
+        let (cfg, log) = (&self.cfg, self.log);
+        let (_, evicted) = self
+            .filter
+            .insert(entry, |rules, track, e| apply(cfg, log, rules, track, e))
+            .map_err(|source| Error::Filter {
+                time: event.time(),
+                source,
+            })?;
+        if let Some(e) = evicted {
+            self.emit(&e.0, &e.1);
         }
         Ok(())
     }
 
-    /// Makes final the events older than `now - horizon`.
+    /// Makes final the events older than `limit` (s).
     fn finalise_before(&mut self, limit: f64) {
-        while self.history.front().is_some_and(|e| e.event.time() < limit) {
-            if let Some(e) = self.history.pop_front() {
-                self.base = e.after;
-                self.emit(&e);
-            }
+        while let Some((entry, after)) = self.filter.pop_final_before(limit) {
+            self.emit(&entry, &after);
         }
     }
 
-    fn emit(&mut self, e: &Entry) {
+    fn emit(&mut self, e: &Entry, after: &State) {
         let kind = match e.event {
             Event::Odometry(o) => {
                 self.report.odometry += 1;
@@ -680,13 +653,14 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
         self.report.inflations += e.inflations as usize;
         self.report.innovation_nll += e.nll;
         let time = e.event.time();
+        let d = after.extra.dead;
         let step = Step {
             index: self.next_index,
             time,
             elapsed: time - self.t0,
             kind,
-            belief: e.after.belief,
-            dead_reckoning: [e.after.dead[0], e.after.dead[1], e.after.dead[2]],
+            belief: after.belief,
+            dead_reckoning: [d[0], d[1], d[2]],
             truth: self.log.truth.pose_at(time, self.cfg.truth_max_gap),
         };
         self.next_index += 1;
@@ -744,23 +718,23 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
         ekf = ekf
             .with_gate(ChiSquareGate::new(g).map_err(|_| Error::InvalidConfig("gate confidence"))?);
     }
+    let recovery = Recovery::new(cfg.recover_after, cfg.inflation)
+        .map_err(|_| Error::InvalidConfig("recovery"))?;
     let tally = Tally::new(3).map_err(|_| Error::InvalidConfig("NEES degrees of freedom"))?;
-    let base = State {
+    let start = Track::new(
         belief,
-        time: t0,
-        v: 0.0,
-        omega: 0.0,
-        dead: x,
-        rejections: 0,
-    };
+        t0,
+        Carried {
+            v: 0.0,
+            omega: 0.0,
+            dead: x,
+        },
+    );
     let mut engine = Engine {
         cfg: *cfg,
-        ekf,
         log,
         t0,
-        base,
-        history: VecDeque::new(),
-        rerun: Vec::new(),
+        filter: Box::new(Filter::new(Rules::new(ekf).with_recovery(recovery), start)),
         next_index: 0,
         tally,
         report: Report {
@@ -804,17 +778,17 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
             engine.finalise_before(s.arrival - cfg.horizon);
             // With a delay within the horizon, every finalised event is
             // older than the sighting, so the base is never re-run.
-            if s.time <= engine.base.time {
+            if s.time <= engine.filter.base().time {
                 engine.report.too_late += 1;
                 continue;
             }
-            let late = s.time < engine.last().time;
+            let late = s.time < engine.filter.time();
             engine.insert(Event::Sighting(*s))?;
             engine.report.late += usize::from(late);
         }
     }
     engine.finalise_before(f64::INFINITY);
-    engine.report.final_belief = engine.base.belief;
+    engine.report.final_belief = engine.filter.base().belief;
     engine.report.summary = engine.tally.summary(0);
     Ok(engine.report)
 }
