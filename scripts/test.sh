@@ -71,6 +71,9 @@ fi
 step "tests (optimised test profile)"
 cargo test --workspace --locked
 
+step "regression guards: byte-identical run and replay logs (scripts/regression-guards.sha256)"
+bash scripts/regression_guards.sh
+
 step "benchmarks compile"
 cargo bench --workspace --locked --no-run
 
