@@ -77,19 +77,15 @@ pub(crate) fn all_finite<T: Scalar>(values: &[T]) -> bool {
 /// The operations saved matter more than their number suggests: in
 /// `predict` this check waits for the last entry of `P-`, and each waiting
 /// operation holds a scheduler entry, so fewer of them let the correction's
-/// independent work (its measurement noise) start earlier (measured on the
-/// f32 step of the `ekf_step` bench: from 1.13x to 1.00x plain nalgebra in
-/// a probe binary, from 1.26x to 1.10x in the bench binary).
+/// independent work start earlier.
 ///
 /// How the sum is formed depends on the scalar's width. For 8-byte scalars
 /// (f64), in four interleaved partial sums (short dependency chains) whose
 /// lanes run on across the two slices, so that a belief (`x` then `P`,
 /// adjacent in memory) is summed as whole vectors. For 4-byte scalars
-/// (f32), in one chain: LLVM packs the four f32 lanes into SSE vectors with
-/// more shuffles than the packing saves (ekf_step bench, f32 step: 544 ->
-/// 525 instructions, 1.05-1.06x -> 1.03x plain nalgebra independent and
-/// 1.06-1.07x -> 1.03-1.05x chained; two lanes: 550 instructions), while for
-/// f64 one chain costs instructions (606 -> 635, session 4).
+/// (f32), in one chain: LLVM packs four f32 lanes into SSE vectors with
+/// more shuffles than the packing saves. Each form is the one that executes
+/// fewer instructions on the `ekf_step` bench (docs/performance.md).
 #[inline(always)]
 pub(crate) fn all_finite_pair<T: Scalar>(a: &[T], b: &[T]) -> bool {
     let zero = T::zero();
