@@ -4,6 +4,8 @@
 pub mod error;
 pub mod locus_csv;
 pub mod mrclam;
+pub mod sighting;
 mod text;
 
 pub use error::{Error, FieldProblem, RecordProblem, Result};
+pub use sighting::{Landmark, Sighting};

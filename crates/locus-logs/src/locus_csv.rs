@@ -19,7 +19,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, FieldProblem, RecordProblem, Result};
-use crate::mrclam::{Groundtruth, Odometry, Pose};
+use crate::mrclam::{Groundtruth, Odometry, TruthPose};
 use crate::text::{TimeOrder, csv_records, read_text};
 
 /// A landmark of the map: an id and a position.
@@ -52,7 +52,7 @@ pub struct LocusLog {
     /// The landmark map, in file order.
     pub landmarks: Vec<MapLandmark>,
     /// The initial pose, if given (`start` line).
-    pub start: Option<Pose>,
+    pub start: Option<TruthPose>,
     /// Odometry (velocities held until the next record), time order.
     pub odometry: Vec<Odometry>,
     /// Measurements in the order received (times may go back).
@@ -73,7 +73,7 @@ pub fn parse(text: &str, path: &Path) -> Result<LocusLog> {
     let mut landmark_lines: Vec<usize> = Vec::new();
     let mut odometry_order = TimeOrder::new();
     let mut truth_order = TimeOrder::new();
-    let mut truth: Vec<Pose> = Vec::new();
+    let mut truth: Vec<TruthPose> = Vec::new();
     let mut start_line: Option<usize> = None;
     for mut f in csv_records(text, path) {
         let kind = f.next_text("kind")?;
@@ -151,8 +151,8 @@ pub fn parse(text: &str, path: &Path) -> Result<LocusLog> {
     Ok(log)
 }
 
-fn pose(f: &mut crate::text::Fields<'_>) -> Result<Pose> {
-    Ok(Pose {
+fn pose(f: &mut crate::text::Fields<'_>) -> Result<TruthPose> {
+    Ok(TruthPose {
         time: f.f64("time")?,
         x: f.f64("x")?,
         y: f.f64("y")?,

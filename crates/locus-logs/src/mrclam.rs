@@ -8,8 +8,8 @@
 //! | file | record | columns |
 //! |---|---|---|
 //! | `Barcodes.dat` | [`BarcodeEntry`] | subject, barcode |
-//! | `Landmark_Groundtruth.dat` | [`Landmark`] | subject, x \[m\], y \[m\], x std \[m\], y std \[m\] |
-//! | `RobotN_Groundtruth.dat` | [`Pose`] | t \[s\], x \[m\], y \[m\], theta \[rad\] (Vicon) |
+//! | `Landmark_Groundtruth.dat` | [`SurveyedLandmark`] | subject, x \[m\], y \[m\], x std \[m\], y std \[m\] |
+//! | `RobotN_Groundtruth.dat` | [`TruthPose`] | t \[s\], x \[m\], y \[m\], theta \[rad\] (Vicon) |
 //! | `RobotN_Odometry.dat` | [`Odometry`] | t \[s\], v \[m/s\], omega \[rad/s\] (commanded) |
 //! | `RobotN_Measurement.dat` | [`Measurement`] | t \[s\], barcode, range \[m\], bearing \[rad\] |
 //!
@@ -110,7 +110,7 @@ impl Barcodes {
 
 /// One line of `Landmark_Groundtruth.dat`: a landmark's surveyed position.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Landmark {
+pub struct SurveyedLandmark {
     /// Subject number (6-20).
     pub subject: u32,
     /// x in the world frame, m.
@@ -125,7 +125,7 @@ pub struct Landmark {
 
 /// A ground-truth pose (one line of `RobotN_Groundtruth.dat`).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Pose {
+pub struct TruthPose {
     /// Time, s (UNIX).
     pub time: f64,
     /// x in the world frame, m.
@@ -164,7 +164,7 @@ pub struct Measurement {
 
 /// A measurement whose barcode has been mapped to a subject.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sighting {
+pub struct SubjectSighting {
     /// Time, s (UNIX).
     pub time: f64,
     /// The subject seen.
@@ -179,9 +179,9 @@ pub struct Sighting {
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Sightings {
     /// Sightings of landmarks (known subjects outside [`ROBOTS`]).
-    pub landmarks: Vec<Sighting>,
+    pub landmarks: Vec<SubjectSighting>,
     /// Sightings of other robots (subjects in [`ROBOTS`]).
-    pub robots: Vec<Sighting>,
+    pub robots: Vec<SubjectSighting>,
     /// Measurements whose barcode is not in `Barcodes.dat`.
     pub unknown: Vec<Measurement>,
 }
@@ -192,7 +192,7 @@ impl Sightings {
     pub fn split(measurements: &[Measurement], barcodes: &Barcodes) -> Self {
         let mut out = Self::default();
         for m in measurements {
-            let sighting = |subject| Sighting {
+            let sighting = |subject| SubjectSighting {
                 time: m.time,
                 subject,
                 range: m.range,
@@ -211,13 +211,13 @@ impl Sightings {
 /// A robot's ground-truth track: poses in non-decreasing time order.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Groundtruth {
-    poses: Vec<Pose>,
+    poses: Vec<TruthPose>,
 }
 
 impl Groundtruth {
     /// A track from poses, which must be in non-decreasing time order (as
     /// the readers guarantee); returns `None` otherwise.
-    pub fn new(poses: Vec<Pose>) -> Option<Self> {
+    pub fn new(poses: Vec<TruthPose>) -> Option<Self> {
         poses
             .windows(2)
             .all(|w| w[0].time <= w[1].time)
@@ -225,7 +225,7 @@ impl Groundtruth {
     }
 
     /// The poses.
-    pub fn poses(&self) -> &[Pose] {
+    pub fn poses(&self) -> &[TruthPose] {
         &self.poses
     }
 
@@ -239,7 +239,7 @@ impl Groundtruth {
     /// to (-pi, pi]). `None` if `t` is outside the track or the two samples
     /// are more than `max_gap` seconds apart (a gap in the coverage). A `t`
     /// equal to a sample's time returns that sample.
-    pub fn pose_at(&self, t: f64, max_gap: f64) -> Option<Pose> {
+    pub fn pose_at(&self, t: f64, max_gap: f64) -> Option<TruthPose> {
         // First index with time > t.
         let i = self.poses.partition_point(|p| p.time <= t);
         let a = *self.poses.get(i.checked_sub(1)?)?;
@@ -252,7 +252,7 @@ impl Groundtruth {
             return None;
         }
         let w = (t - a.time) / dt;
-        Some(Pose {
+        Some(TruthPose {
             time: t,
             x: a.x + w * (b.x - a.x),
             y: a.y + w * (b.y - a.y),
@@ -300,10 +300,10 @@ pub fn parse_barcodes(text: &str, path: &Path) -> Result<Barcodes> {
 }
 
 /// Parses the text of `Landmark_Groundtruth.dat`; `path` names it in errors.
-pub fn parse_landmarks(text: &str, path: &Path) -> Result<Vec<Landmark>> {
-    let mut out: Vec<(usize, Landmark)> = Vec::new();
+pub fn parse_landmarks(text: &str, path: &Path) -> Result<Vec<SurveyedLandmark>> {
+    let mut out: Vec<(usize, SurveyedLandmark)> = Vec::new();
     for mut f in records(text, path) {
-        let lm = Landmark {
+        let lm = SurveyedLandmark {
             subject: f.u32("subject")?,
             x: f.f64("x")?,
             y: f.f64("y")?,
@@ -347,7 +347,7 @@ fn parse_timed<T>(
 /// Parses the text of `RobotN_Groundtruth.dat`; `path` names it in errors.
 pub fn parse_groundtruth(text: &str, path: &Path) -> Result<Groundtruth> {
     let poses = parse_timed(text, path, 4, |time, f| {
-        Ok(Pose {
+        Ok(TruthPose {
             time,
             x: f.f64("x")?,
             y: f.f64("y")?,
@@ -386,7 +386,7 @@ pub fn read_barcodes(path: &Path) -> Result<Barcodes> {
 }
 
 /// Reads `Landmark_Groundtruth.dat` (plain or xz).
-pub fn read_landmarks(path: &Path) -> Result<Vec<Landmark>> {
+pub fn read_landmarks(path: &Path) -> Result<Vec<SurveyedLandmark>> {
     parse_landmarks(&read_text(path)?, path)
 }
 
@@ -413,7 +413,7 @@ pub struct Dataset {
     /// The barcode <-> subject table.
     pub barcodes: Barcodes,
     /// The landmarks' surveyed positions.
-    pub landmarks: Vec<Landmark>,
+    pub landmarks: Vec<SurveyedLandmark>,
 }
 
 impl Dataset {
@@ -436,7 +436,7 @@ impl Dataset {
     }
 
     /// A landmark's surveyed position by subject number.
-    pub fn landmark(&self, subject: u32) -> Option<&Landmark> {
+    pub fn landmark(&self, subject: u32) -> Option<&SurveyedLandmark> {
         self.landmarks.iter().find(|l| l.subject == subject)
     }
 
@@ -478,7 +478,7 @@ mod tests {
     use super::*;
 
     fn track() -> Groundtruth {
-        let p = |time, x, theta| Pose {
+        let p = |time, x, theta| TruthPose {
             time,
             x,
             y: 0.0,

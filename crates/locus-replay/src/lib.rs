@@ -47,7 +47,7 @@ use locus_core::{
     wrap_angle,
 };
 use locus_eval::{Sample, Summary, Tally};
-use locus_logs::mrclam::{Odometry, Pose};
+use locus_logs::mrclam::{Odometry, TruthPose};
 use locus_models::range_bearing::RangeBearing;
 use locus_models::unicycle::{Unicycle, Velocities};
 
@@ -272,7 +272,7 @@ pub struct Step {
     /// Dead reckoning (odometry alone) `[x, y, theta]` at this time.
     pub dead_reckoning: [f64; 3],
     /// Ground truth interpolated at this time, if covered.
-    pub truth: Option<Pose>,
+    pub truth: Option<TruthPose>,
 }
 
 impl Step {

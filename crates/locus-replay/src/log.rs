@@ -6,34 +6,8 @@
 use std::path::Path;
 
 use locus_logs::locus_csv::{self, LocusLog};
-use locus_logs::mrclam::{Dataset, Groundtruth, Odometry, Pose};
-
-/// A landmark of the map.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Landmark {
-    /// The id sightings refer to (MRCLAM: the subject number).
-    pub id: u32,
-    /// x in the world frame, m.
-    pub x: f64,
-    /// y in the world frame, m.
-    pub y: f64,
-}
-
-/// A range-bearing sighting of a landmark.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sighting {
-    /// Time the sighting was taken, s: the filter applies it at this time.
-    pub time: f64,
-    /// Time the filter receives it, s (`>= time`; equal for a log recorded
-    /// in time order). Odometry up to this time is processed first.
-    pub arrival: f64,
-    /// The landmark's id.
-    pub landmark: u32,
-    /// Range from the robot's centre, m.
-    pub range: f64,
-    /// Bearing from the robot's heading, counter-clockwise positive, rad.
-    pub bearing: f64,
-}
+use locus_logs::mrclam::{Dataset, Groundtruth, Odometry, TruthPose};
+pub use locus_logs::{Landmark, Sighting};
 
 /// A robot's log, ready to replay.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -52,7 +26,7 @@ pub struct Log {
     pub truth: Groundtruth,
     /// The initial pose; if `None`, the ground truth at the first odometry
     /// time is used.
-    pub start: Option<Pose>,
+    pub start: Option<TruthPose>,
     /// Sightings of other robots, left out of [`Log::sightings`] (they are
     /// not landmarks).
     pub robot_sightings: usize,

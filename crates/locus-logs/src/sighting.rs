@@ -1,0 +1,29 @@
+//! The landmark map and the landmark sightings of a recorded log, whatever
+//! its format: what the replay consumes.
+
+/// A landmark of the map.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Landmark {
+    /// The id sightings refer to (MRCLAM: the subject number).
+    pub id: u32,
+    /// x in the world frame, m.
+    pub x: f64,
+    /// y in the world frame, m.
+    pub y: f64,
+}
+
+/// A range-bearing sighting of a landmark.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sighting {
+    /// Time the sighting was taken, s: the filter applies it at this time.
+    pub time: f64,
+    /// Time the filter receives it, s (`>= time`; equal for a log recorded
+    /// in time order). Odometry up to this time is processed first.
+    pub arrival: f64,
+    /// The landmark's id.
+    pub landmark: u32,
+    /// Range from the robot's centre, m.
+    pub range: f64,
+    /// Bearing from the robot's heading, counter-clockwise positive, rad.
+    pub bearing: f64,
+}
