@@ -11,39 +11,46 @@
 //! the two runs are bit-identical (IEEE-754 single precision, round to
 //! nearest, no fused multiply-add: Rust never contracts `a * b + c`).
 //!
-//! One step of `dt` = 10 ms ([`Firmware::step`]):
+//! One step of `dt` = 10 ms ([`Firmware::step`]) runs paper 001's
+//! localisation loop as [`locus_models::square001`] has it, once for every
+//! loop of Locus ([`Localiser`]: the running filter, [`DiffDrive`], the
+//! [`Odometer`] and the [`IrAssociation`]); the firmware only supplies the
+//! counts, the readings and the arena:
 //! 1. [`Firmware::decode`]: the step's [`SAMPLES_PER_STEP`] samples of the
 //!    channel levels `(A, B)` of the right and left encoders go through a
 //!    [`QuadratureDecoder`] each (20-bit wrapping counters, paper 004
-//!    section 2.1); the wrapping count differences since the last step times
-//!    the count quantum `dP = pi R / (2 N G)` are the wheel travels `d1`
-//!    (right), `d2` (left) of paper 001 eq. 9.
-//! 2. [`Firmware::filter_step`]: EKF prediction with [`DiffDrive`] (paper
-//!    001 eq. 7-13, [`Firmware::predict`]); if the step has an IR reading
-//!    ([`Firmware::correct`]), data association on the predicted pose
-//!    ([`Firmware::associate`], [`associate_ir_wall`]) and, for an
-//!    axis-aligned wall, the correction with [`IrPairObservation`]
-//!    (eq. 3-5, 17-20; [`Firmware::correct_wall`]), Joseph form, behind a
-//!    99 % chi-square gate on the NIS (threshold precomputed on the host,
-//!    see [`Config::gate_threshold`]).
+//!    section 2.1); the localiser's [`Odometer`] turns the counts into the
+//!    wheel travels `d1` (right), `d2` (left) of paper 001 eq. 9 (wrapping
+//!    count differences times the count quantum `dP = pi R / (2 N G)`).
+//! 2. [`Firmware::filter_step`]: prediction with [`DiffDrive`] (paper 001
+//!    eq. 7-13, [`Firmware::predict`]); if the step has an IR reading,
+//!    [`Firmware::correct`]: [`Localiser::ir`] on [`square_data::ARENA`]
+//!    associates it on the predicted pose ([`associate_ir_wall`]) and, for
+//!    an axis-aligned wall, corrects with [`IrPairObservation`] (eq. 3-5,
+//!    17-20), Joseph form, behind a 99 % chi-square gate on the NIS (a
+//!    [`ChiSquareGate::from_threshold`] with the threshold precomputed on the
+//!    host, see [`Config::gate_threshold`]).
 //! 3. [`Firmware::odometry_step`]: the odometry-only pose advanced by the
 //!    same wheel travels, midpoint heading, with the sine and cosine from the
 //!    paper's 16-bit, 16-iteration [`Cordic`] (paper 004 section 4.1).
 //! 4. The step's state is folded into an FNV-1a checksum ([`Checksum`]): the
 //!    `f32` bit patterns of `x`, `P` (row-major, all nine entries) and the
 //!    odometry pose.
+//!
+//! [`associate_ir_wall`]: locus_models::associate_ir_wall
 #![no_std]
 #![forbid(unsafe_code)]
 
 pub mod square_data;
 
 use locus_core::nalgebra::{Matrix3, Vector3};
-use locus_core::{Belief, ChiSquareGate, CovarianceUpdate, Ekf};
+use locus_core::{Belief, ChiSquareGate, CovarianceUpdate, Ekf, Update};
 use locus_models::{
-    AxisWall, DiffDrive, IrPair, IrPairObservation, WheelTravel, associate_ir_wall,
+    DiffDrive, IrAssociation, IrOutcome, IrPair, IrPairObservation, Localiser, Odometer,
+    WheelTravel,
 };
 use locus_odometry::redundant::{Integration, Motion, Pose};
-use locus_odometry::{Cordic, Counter, QuadratureDecoder, Wheel, wrapping_diff};
+use locus_odometry::{Cordic, Counter, QuadratureDecoder, Wheel};
 
 /// Samples of the channel levels per filter step (the decoder runs at
 /// `SAMPLES_PER_STEP / dt`, 800 Hz for 10 ms steps). Each sample is a nibble
@@ -99,7 +106,7 @@ pub enum Error {
         /// The filter's error.
         error: locus_core::Error,
     },
-    /// The configuration is invalid (the gate's confidence).
+    /// The configuration is invalid (the gate's threshold or confidence).
     Config(locus_core::Error),
 }
 
@@ -138,6 +145,24 @@ impl Checksum {
             self.word(v.to_bits());
         }
     }
+}
+
+/// What [`Firmware::correct`] did with an IR reading: which of the run's
+/// counts it moved.
+///
+/// The localiser's own answer, [`IrOutcome`] (the observation and the
+/// typed update: NIS, `S`, gain, posterior and a possible first attempt,
+/// 256 bytes), is read inside [`Firmware::correct`] and not handed on:
+/// returning it by value cost about 600 instructions per correction and
+/// 216 bytes of stack on the Cortex-M4F, and the step needs only this.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reading {
+    /// No axis-aligned wall in range along the sensing ray: dropped.
+    Unassociated,
+    /// Associated, and the correction was applied.
+    Corrected,
+    /// Associated, and the gate rejected the correction.
+    Rejected,
 }
 
 /// What the run reports: the final belief and odometry pose, the checksum of
@@ -208,22 +233,16 @@ impl Report {
     }
 }
 
-/// The firmware's whole state: configuration, decoders, belief, odometry pose
-/// and checksum. Plain data, lives on the stack.
+/// The firmware's whole state: the decoders, paper 001's [`Localiser`]
+/// (belief, gate, NIS monitor, drive model, odometer, IR association), the
+/// odometry pose, the checksum and the counts. Plain data, lives on the
+/// stack.
 #[derive(Debug, Clone)]
 pub struct Firmware {
-    ekf: Ekf<f32>,
-    gate_threshold: f32,
-    model: DiffDrive<f32>,
-    pair: IrPair<f32>,
-    r: [f32; 2],
-    association_range: f32,
-    wheel: Wheel<f32>,
+    localiser: Localiser<f32>,
     cordic: Cordic,
     right: QuadratureDecoder,
     left: QuadratureDecoder,
-    last: [u32; 2],
-    belief: Belief<f32, 3>,
     odometry: Pose<f32>,
     checksum: Checksum,
     steps: u32,
@@ -233,68 +252,67 @@ pub struct Firmware {
 }
 
 impl Firmware {
-    /// The state at the start of a run: decoders at levels 00 and count 0,
-    /// belief `N(start, diag(initial_std^2))`, odometry pose at `start`.
+    /// The state at the start of a run: decoders at levels 00 and count 0
+    /// (the odometer's reference), belief `N(start, diag(initial_std^2))`,
+    /// odometry pose at `start`.
     ///
     /// The correction is gated on the configuration's precomputed 2-dof
-    /// threshold: the filter runs without a [`ChiSquareGate`] and a
-    /// correction whose NIS is not `<= gate_threshold` is discarded (the
-    /// belief stays the prior), which is what the filter's own gate does
-    /// (`ChiSquareGate::accepts`); [`Firmware::with_library_gate`] runs the
-    /// filter's gate instead, and the tests check that both give the same
-    /// run bit for bit.
+    /// threshold ([`ChiSquareGate::from_threshold`]), so the firmware
+    /// carries no chi-square quantile; [`Firmware::with_library_gate`]
+    /// computes the gate from the confidence instead, and the tests check
+    /// that both give the same run bit for bit.
     ///
     /// # Errors
-    /// [`Error::Config`] for a gate threshold that is NaN.
+    /// [`Error::Config`] for a gate threshold that is not > 0 (NaN
+    /// included).
     #[inline(never)]
     pub fn new(cfg: &Config) -> Result<Self, Error> {
-        if cfg.gate_threshold.is_nan() {
-            return Err(Error::Config(locus_core::Error::InvalidParameter(
-                "gate threshold is NaN",
-            )));
-        }
-        Ok(Self::with_ekf(
-            cfg,
-            Ekf::new(CovarianceUpdate::Joseph),
-            cfg.gate_threshold,
-        ))
+        let gate = ChiSquareGate::from_threshold(2, cfg.gate_threshold).map_err(Error::Config)?;
+        Ok(Self::with_gate(cfg, gate))
     }
 
-    /// As [`Firmware::new`], but with the filter's own [`ChiSquareGate`] at
-    /// `gate_confidence` (thresholds computed here, in `f64`) instead of the
-    /// precomputed threshold: the reference the tests compare against.
+    /// As [`Firmware::new`], but with the gate computed here from
+    /// `gate_confidence` ([`ChiSquareGate::new`]: the chi-square quantile in
+    /// `f64`) instead of the precomputed threshold: the reference the tests
+    /// compare against.
     ///
     /// # Errors
     /// [`Error::Config`] for a gate confidence outside (0, 1).
     pub fn with_library_gate(cfg: &Config) -> Result<Self, Error> {
         let gate = ChiSquareGate::new(cfg.gate_confidence).map_err(Error::Config)?;
-        Ok(Self::with_ekf(
-            cfg,
-            Ekf::new(CovarianceUpdate::Joseph).with_gate(gate),
-            f32::INFINITY,
-        ))
+        Ok(Self::with_gate(cfg, gate))
     }
 
     #[inline(always)]
-    fn with_ekf(cfg: &Config, ekf: Ekf<f32>, gate_threshold: f32) -> Self {
+    fn with_gate(cfg: &Config, gate: ChiSquareGate<f32>) -> Self {
         let [s0, s1, s2] = cfg.start;
         let [d0, d1, d2] = cfg.initial_std;
-        Self {
-            ekf,
-            gate_threshold,
-            model: DiffDrive::new(cfg.wheelbase, cfg.q11, cfg.q22),
+        let belief = Belief::new(
+            Vector3::new(s0, s1, s2),
+            Matrix3::from_diagonal(&Vector3::new(d0 * d0, d1 * d1, d2 * d2)),
+        );
+        let odometer = Odometer::new(
+            Wheel::new(cfg.encoder_lines, 1.0, cfg.wheel_radius),
+            Counter::paper().bits(),
+        )
+        .with_reference([0, 0]);
+        let ir = IrAssociation {
             pair: IrPair::centred(cfg.ir_spacing),
-            r: [cfg.r11, cfg.r22],
-            association_range: cfg.association_range,
-            wheel: Wheel::new(cfg.encoder_lines, 1.0, cfg.wheel_radius),
+            range: cfg.association_range,
+            r11: cfg.r11,
+            r22: cfg.r22,
+        };
+        Self {
+            localiser: Localiser::new(
+                Ekf::new(CovarianceUpdate::Joseph).with_gate(gate),
+                belief,
+                DiffDrive::new(cfg.wheelbase, cfg.q11, cfg.q22),
+                odometer,
+                ir,
+            ),
             cordic: Cordic::PAPER,
             right: QuadratureDecoder::new(false, false, Counter::paper()),
             left: QuadratureDecoder::new(false, false, Counter::paper()),
-            last: [0, 0],
-            belief: Belief::new(
-                Vector3::new(s0, s1, s2),
-                Matrix3::from_diagonal(&Vector3::new(d0 * d0, d1 * d1, d2 * d2)),
-            ),
             odometry: Pose::new(s0, s1, s2),
             checksum: Checksum::default(),
             steps: 0,
@@ -306,7 +324,8 @@ impl Firmware {
 
     /// Decodes one step's [`SAMPLES_PER_STEP`] level samples (nibbles of
     /// `samples`, see [`SAMPLES_PER_STEP`]) and returns the wheel travels of
-    /// the step (m; paper 001 eq. 9, `d_i = counts_i dP`).
+    /// the step from the localiser's [`Odometer`] (m; paper 001 eq. 9,
+    /// `d_i = counts_i dP`, wrap-safe on the 20-bit counters).
     #[inline(never)]
     pub fn decode(&mut self, samples: u32) -> WheelTravel<f32> {
         for k in 0..SAMPLES_PER_STEP {
@@ -315,20 +334,16 @@ impl Firmware {
             self.left.update(nibble & 4 != 0, nibble & 8 != 0);
         }
         let now = [self.right.counter().value(), self.left.counter().value()];
-        let bits = Counter::paper().bits();
-        let d = [
-            wrapping_diff(now[0], self.last[0], bits),
-            wrapping_diff(now[1], self.last[1], bits),
-        ];
-        self.last = now;
-        WheelTravel {
-            d1: self.wheel.distance(d[0]),
-            d2: self.wheel.distance(d[1]),
-        }
+        // The odometer has had its reference since `new`, so it always
+        // answers; no travel is the only sensible value otherwise.
+        self.localiser
+            .odometer
+            .travel(now)
+            .unwrap_or(WheelTravel { d1: 0.0, d2: 0.0 })
     }
 
-    /// The EKF step: [`predict`](Self::predict) with the wheel travels `u`,
-    /// then, if the step has IR readings `ir = [d_s1, d_s2]` (m),
+    /// The filter step: [`predict`](Self::predict) with the wheel travels
+    /// `u`, then, if the step has IR readings `ir = [d_s1, d_s2]` (m),
     /// [`correct`](Self::correct).
     ///
     /// # Errors
@@ -336,90 +351,81 @@ impl Firmware {
     /// unchanged).
     pub fn filter_step(&mut self, u: &WheelTravel<f32>, ir: Option<[f32; 2]>) -> Result<(), Error> {
         self.predict(u)?;
-        match ir {
-            Some(readings) => self.correct(readings),
-            None => Ok(()),
+        if let Some(readings) = ir {
+            self.correct(readings)?;
         }
+        Ok(())
     }
 
-    /// EKF prediction with [`DiffDrive`] (paper 001 eq. 7-13):
-    /// `X- = f(X+, u, 0)`, `P- = A P+ A^T + W Q W^T`.
+    /// Prediction with [`DiffDrive`] (paper 001 eq. 7-13,
+    /// [`Localiser::predict`]): `X- = f(X+, u, 0)`,
+    /// `P- = A P+ A^T + W Q W^T`.
     ///
     /// # Errors
     /// [`Error::Filter`] for a non-finite input (the belief is unchanged).
     #[inline(never)]
     pub fn predict(&mut self, u: &WheelTravel<f32>) -> Result<(), Error> {
         let step = self.steps;
-        self.belief = self
-            .ekf
-            .predict(&self.belief, &self.model, u)
-            .map_err(|error| Error::Filter { step, error })?;
-        Ok(())
+        self.localiser
+            .predict(u)
+            .map_err(|error| Error::Filter { step, error })
     }
 
-    /// Data association and correction of the readings `[d_s1, d_s2]` (m):
-    /// [`associate`](Self::associate), then, for an axis-aligned wall,
-    /// [`correct_wall`](Self::correct_wall).
+    /// An IR reading `[d_s1, d_s2]` (m): [`Localiser::ir`] on the arena
+    /// ([`square_data::ARENA`]): the wall the pair's sensing ray hits from
+    /// the current (predicted) pose within `association_range`
+    /// ([`locus_models::associate_ir_wall`]; none: the reading is dropped
+    /// and counted as unassociated), then the correction with [`IrPairObservation`]
+    /// (paper 001 eq. 3-5 for `z`, eq. 17-20 for `H` and `V R V^T`),
+    /// `S = H P H^T + V R V^T`, `G = P H^T S^-1`, Joseph form, kept only if
+    /// the NIS passes the gate (counted as a correction or a rejection).
     ///
     /// # Errors
-    /// [`Error::Filter`] if the filter rejects the measurement (the belief
-    /// is unchanged).
-    pub fn correct(&mut self, readings: [f32; 2]) -> Result<(), Error> {
-        match self.associate() {
-            Some(wall) => self.correct_wall(wall, readings),
-            None => Ok(()),
-        }
-    }
-
-    /// Data association on the current (predicted) pose
-    /// ([`associate_ir_wall`], paper 001): the axis-aligned wall the IR
-    /// pair's sensing ray hits within `association_range`, or `None` (the
-    /// reading is then dropped and counted as unassociated).
+    /// [`Error::Filter`] if the filter rejects the measurement, or predicts
+    /// none (the belief is unchanged).
     #[inline(never)]
-    pub fn associate(&mut self) -> Option<AxisWall<f32>> {
-        let wall = associate_ir_wall(
-            &self.belief.x,
-            &self.pair,
-            &square_data::ARENA,
-            self.association_range,
-        );
-        if wall.is_none() {
-            self.unassociated += 1;
-        }
-        wall
-    }
-
-    /// The EKF correction with the readings `[d_s1, d_s2]` (m) of `wall`:
-    /// [`IrPairObservation`] (paper 001 eq. 3-5 for `z`, eq. 17-20 for `H`
-    /// and `V R V^T`), `S = H P H^T + V R V^T`, `G = P H^T S^-1`, Joseph form;
-    /// kept only if the NIS passes the gate.
-    ///
-    /// # Errors
-    /// [`Error::Filter`] if the filter rejects the measurement (the belief
-    /// is unchanged).
-    #[inline(never)]
-    pub fn correct_wall(&mut self, wall: AxisWall<f32>, [ds1, ds2]: [f32; 2]) -> Result<(), Error> {
+    pub fn correct(&mut self, readings: [f32; 2]) -> Result<Reading, Error> {
         let step = self.steps;
-        let obs = IrPairObservation {
-            pair: self.pair,
-            wall,
-            ds1,
-            ds2,
-            r11: self.r[0],
-            r22: self.r[1],
-        };
-        let c = self
-            .ekf
-            .correct(&self.belief, &obs, &obs.z())
+        let outcome = self
+            .localiser
+            .ir(&square_data::ARENA, readings)
             .map_err(|error| Error::Filter { step, error })?;
-        // `<=` as `ChiSquareGate::accepts` (false for NaN).
-        if c.applied && c.nis <= self.gate_threshold {
-            self.corrections += 1;
-            self.belief = c.belief;
-        } else {
-            self.rejected += 1;
-        }
-        Ok(())
+        Ok(match outcome {
+            IrOutcome::Unassociated => {
+                self.unassociated += 1;
+                Reading::Unassociated
+            }
+            IrOutcome::Associated { update, .. } => match update {
+                Update::Applied { .. } => {
+                    self.corrections += 1;
+                    Reading::Corrected
+                }
+                Update::Gated { .. } => {
+                    self.rejected += 1;
+                    Reading::Rejected
+                }
+                // The IR pair predicts a measurement at every state; as the
+                // filter's error it stops the run, as any other would.
+                Update::NoMeasurement => {
+                    return Err(Error::Filter {
+                        step,
+                        error: locus_core::Error::NoMeasurement,
+                    });
+                }
+            },
+        })
+    }
+
+    /// The data association alone, as [`correct`](Self::correct) does it
+    /// first: the observation of the readings `[d_s1, d_s2]` (m) of the wall
+    /// the estimate's sensing ray hits ([`IrAssociation::observe`] on
+    /// [`square_data::ARENA`]), or `None`. Changes nothing; the firmware
+    /// binary times it to split a correction's cost.
+    #[inline(never)]
+    pub fn associate(&self, readings: [f32; 2]) -> Option<IrPairObservation<f32>> {
+        self.localiser
+            .ir
+            .observe(&self.localiser.belief().x, &square_data::ARENA, readings)
     }
 
     /// Advances the odometry-only pose by the wheel travels `u`: path length
@@ -427,7 +433,7 @@ impl Firmware {
     /// midpoint heading, sine and cosine by the [`Cordic`].
     #[inline(never)]
     pub fn odometry_step(&mut self, u: &WheelTravel<f32>) {
-        let (ds, dtheta) = self.model.increments(u);
+        let (ds, dtheta) = self.localiser.model.increments(u);
         let inc = Motion { ds, dtheta }.increment(
             self.odometry.theta,
             Integration::Midpoint,
@@ -439,8 +445,9 @@ impl Firmware {
     /// Folds the current state into the checksum and counts the step.
     #[inline(never)]
     pub fn finish_step(&mut self) {
-        self.checksum.floats(self.belief.x.as_slice());
-        self.checksum.floats(self.belief.p.transpose().as_slice());
+        let belief = self.localiser.belief();
+        self.checksum.floats(belief.x.as_slice());
+        self.checksum.floats(belief.p.transpose().as_slice());
         let o = self.odometry;
         self.checksum.floats(&[o.x, o.y, o.theta]);
         self.steps += 1;
@@ -463,13 +470,20 @@ impl Firmware {
 
     /// The current belief.
     pub fn belief(&self) -> &Belief<f32, 3> {
-        &self.belief
+        self.localiser.belief()
+    }
+
+    /// The localiser (its running filter holds the gate and the NIS
+    /// consistency monitor).
+    pub fn localiser(&self) -> &Localiser<f32> {
+        &self.localiser
     }
 
     /// The report of the run so far.
     pub fn report(&self) -> Report {
-        let x = self.belief.x;
-        let pt = self.belief.p.transpose(); // column-major storage: rows of P
+        let belief = self.localiser.belief();
+        let x = belief.x;
+        let pt = belief.p.transpose(); // column-major storage: rows of P
         let mut p = [0.0f32; 9];
         p.copy_from_slice(pt.as_slice());
         Report {

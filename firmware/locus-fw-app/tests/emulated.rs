@@ -248,6 +248,8 @@ fn instructions_per_step_under_icount() {
     let steps = fw.u64("steps");
     let per = |ticks: &str, n: u64| instructions(fw, fw.u64(ticks)) / n as f64;
     let ir_steps = fw.u64("steps_with_ir");
+    // Readings the association found a wall for (only those are corrected).
+    let associated = fw.u64("steps_associated");
     let max = |ticks: &str| instructions(fw, fw.u64(ticks));
     let rows = [
         (
@@ -261,14 +263,19 @@ fn instructions_per_step_under_icount() {
             Some(max("ticks_predict_max")),
         ),
         (
-            "IR data association (steps with IR readings)",
+            "IR data association alone (steps with IR readings)",
             per("ticks_associate", ir_steps),
             Some(max("ticks_associate_max")),
         ),
         (
-            "EKF correction, IR pair (associated readings)",
-            per("ticks_correct", fw.u64("steps_associated")),
+            "IR reading, Localiser::ir: association + correction",
+            per("ticks_correct", associated),
             Some(max("ticks_correct_max")),
+        ),
+        (
+            "  of which the correction (minus the association)",
+            per("ticks_correct", associated) - per("ticks_associate_of_associated", associated),
+            None,
         ),
         ("CORDIC odometry pose", per("ticks_odometry", steps), None),
         ("checksum (harness)", per("ticks_checksum", steps), None),
@@ -284,8 +291,8 @@ fn instructions_per_step_under_icount() {
         );
     }
     println!(
-        "  ({steps} steps, {ir_steps} with IR readings; max: the largest single step; \
-         +-1 SysTick tick = +-0.6 instruction per bracket)"
+        "  ({steps} steps, {ir_steps} with IR readings, {associated} associated; max: the \
+         largest single step; +-1 SysTick tick = +-0.6 instruction per bracket)"
     );
     // The calibration is 1.6 ticks per instruction: SysTick at the board's
     // 25 MHz (40 ns) against 64 ns per instruction.
@@ -315,6 +322,11 @@ fn classify(name: &str) -> Part {
     }
     if starts("locus_fw_app::Firmware::finish_step") {
         return Part::Excluded("checksum (harness)");
+    }
+    if starts("locus_fw_app::Firmware::associate") {
+        // The binary's timing probe; a step associates inside
+        // `Firmware::correct` (`Localiser::ir`), which is counted.
+        return Part::Excluded("association probe (harness timing only)");
     }
     if starts("locus_fw_app::Firmware::") {
         return Part::Counted(
@@ -482,8 +494,8 @@ fn symbols(elf: &Path) -> Vec<Symbol> {
 /// **Flash** is the sum of the sizes of the ELF's code and read-only data
 /// symbols (`llvm-nm --print-size`, kinds t/T/r/R) classified by
 /// [`classify`] as counted: the `Firmware` step functions (`new`, `decode`,
-/// `filter_step`, `odometry_step`, each `#[inline(never)]`, into which the
-/// filter, the models, the decoder and the CORDIC are inlined), whatever of
+/// `predict`, `correct`, `odometry_step`, each `#[inline(never)]`, into
+/// which the localiser, the models, the decoder and the CORDIC are inlined), whatever of
 /// `locus_core`, `locus_models`, `locus_odometry`, `nalgebra`/`simba` and
 /// `libm` stays out of line, **all** of the compiler runtime (soft-float
 /// `f64`, 64-bit division: also used by the formatting, counted in full) and
@@ -491,7 +503,9 @@ fn symbols(elf: &Path) -> Vec<Symbol> {
 /// name; they include the format strings). Excluded: the embedded data
 /// (`square_data`), semihosting, `core::fmt` and float printing, panic
 /// paths, the harness (startup, vector table, `main`, timing, stack
-/// painting) and the checksum.
+/// painting), the association probe `Firmware::associate` (the binary times
+/// it alone; the step associates inside `Firmware::correct`) and the
+/// checksum.
 ///
 /// **RAM** is the stack high-water mark the firmware measured (painted stack
 /// below `main`, from reset to the end of the run, before any printing; it

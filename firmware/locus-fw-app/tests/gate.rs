@@ -1,6 +1,6 @@
 //! Host-only checks of the firmware application (no emulation): the
-//! precomputed gate threshold is the filter's own gate, and the decoders count
-//! what the simulator's encoders counted.
+//! precomputed gate threshold is the filter's own gate, the decoders count
+//! what the simulator's encoders counted, and the run keeps its checksum.
 
 use locus_core::ChiSquareGate;
 use locus_fw_app::{Firmware, run, run_with, square_data::CONFIG};
@@ -45,4 +45,22 @@ fn the_decoders_count_what_the_simulators_encoders_counted() {
         ]
     );
     assert_eq!(report.invalid_transitions, 0);
+}
+
+#[test]
+fn the_run_keeps_its_documented_checksum() {
+    // docs/firmware.md: the checksum over the 3000 steps of
+    // `square_data` (regenerating the data changes it; update the docs).
+    let report = run().expect("run");
+    assert_eq!(report.checksum, 0xc8d8_552f, "{report:?}");
+    // The localiser's NIS monitor saw the corrections (its window is full).
+    let mut fw = Firmware::new(&CONFIG).expect("firmware");
+    for (samples, ir) in locus_fw_app::square_data::WAVEFORM
+        .iter()
+        .zip(locus_fw_app::square_data::IR.iter())
+    {
+        fw.step(*samples, *ir).expect("step");
+    }
+    assert_eq!(fw.report(), report);
+    assert!(fw.localiser().filter.monitor().is_full());
 }
