@@ -46,8 +46,8 @@ use locus_models::{DiffDrive, IrPair, IrPairObservation, WheelTravel, associate_
 use locus_odometry::{Wheel as EncoderWheel, wrapping_diff};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
-use rand_distr::{Distribution, StandardNormal};
 
+use crate::noise::gauss;
 use crate::robot::{Command, Kinematics, Pose, Robot, RobotError, SlipSchedule, Wheel};
 use crate::scenario::{Record, Sample, Summary, Tally};
 use crate::sensors::{Encoder, IrPairSensor, SensorError, SharpIr};
@@ -270,12 +270,12 @@ impl SquareConfig {
     /// this fixed order, so [`run_square`] and the UDP robot endpoint
     /// (`locus-net`) simulate the same robot from the same seed.
     pub fn true_robot(&self, rng: &mut StdRng) -> (Robot, Pose) {
-        let mut draw = |std: f64| -> f64 {
-            let n: f64 = StandardNormal.sample(rng);
-            std * n
-        };
         let (s, sd) = (self.start, self.initial_std);
-        let true_start = Pose::new(s[0] + draw(sd[0]), s[1] + draw(sd[1]), s[2] + draw(sd[2]));
+        let true_start = Pose::new(
+            s[0] + gauss(rng, sd[0]),
+            s[1] + gauss(rng, sd[1]),
+            s[2] + gauss(rng, sd[2]),
+        );
         // Slip bumps over the first lap's wheel travel.
         let lap_length = 8.0 * locus_control::SQUARE_HALF_SIDE;
         let mut slip = SlipSchedule::random_bumps(
@@ -575,14 +575,15 @@ impl Record for StepRecord {
     }
 }
 
-/// NEES `e^T P^-1 e` of `x` against `truth` (heading error wrapped).
+/// NEES `e^T P^-1 e` of `x` against `truth` (heading error wrapped); NaN
+/// if `P` is not positive definite.
 fn nees(x: &Vector3<f64>, p: &Matrix3<f64>, truth: &Pose) -> f64 {
     let e = Vector3::new(
         truth.x - x[0],
         truth.y - x[1],
         wrap_angle(truth.theta - x[2]),
     );
-    p.cholesky().map_or(f64::INFINITY, |c| e.dot(&c.solve(&e)))
+    locus_eval::nees(&e, p)
 }
 
 /// Diagonal of `H K = H P H^T S^-1` at the prior `belief` for `obs`
@@ -595,12 +596,6 @@ fn gain_diagonal(obs: &IrPairObservation<f64>, belief: &Belief<f64, 3>) -> [f64;
         let hk = hph * si;
         [hk[(0, 0)], hk[(1, 1)]]
     })
-}
-
-/// A draw from `N(0, std^2)`.
-fn gauss(rng: &mut StdRng, std: f64) -> f64 {
-    let n: f64 = StandardNormal.sample(rng);
-    std * n
 }
 
 /// An ideal-mode observation and its `z` (m, rad).

@@ -46,10 +46,10 @@ use locus_models::camera::{EulerRotation, nominal_pose};
 use locus_models::{CameraMarks4, ContinuousObserver, RandomWalk6};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
-use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 use crate::closed_loop::Error;
+use crate::noise::gauss;
 use crate::scenario::{Record, Sample, Summary, Tally};
 
 /// The estimator of the `hover` scenario.
@@ -227,12 +227,6 @@ impl Record for HoverRecord {
     }
 }
 
-/// A draw from `N(0, std^2)` (always draws one value).
-fn gauss(rng: &mut StdRng, std: f64) -> f64 {
-    let n: f64 = StandardNormal.sample(rng);
-    std * n
-}
-
 /// The angle (rad, in `[0, pi]`) of the rotation `R(a)^T R(b)` between the
 /// attitudes of states `a` and `b`.
 #[must_use]
@@ -316,10 +310,7 @@ pub fn run_hover(
         }
 
         let e = walk.state_residual(&truth, &belief.x);
-        let nees = belief
-            .p
-            .cholesky()
-            .map_or(f64::INFINITY, |c| e.dot(&c.solve(&e)));
+        let nees = locus_eval::nees(&e, &belief.p);
         let p = &belief.p;
         let idx = [0, 1, 5];
         let mut covariance = [[0.0; 3]; 3];

@@ -13,6 +13,7 @@ pub mod closed_loop;
 pub mod firmware_data;
 pub mod guide;
 pub mod hover;
+mod noise;
 pub mod robot;
 /// The evaluation types every scenario reports through (defined in
 /// `locus-eval`).

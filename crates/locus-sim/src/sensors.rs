@@ -18,7 +18,8 @@ use locus_models::laser_wall::{BeamLimits, LaserMount, Segment, ray_cast};
 use locus_odometry::{Counter, QuadratureDecoder, Wheel};
 use rand::RngExt;
 use rand::rngs::StdRng;
-use rand_distr::{Distribution, StandardNormal};
+
+use crate::noise::gauss;
 
 /// Errors of sensor construction and use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -30,13 +31,6 @@ pub enum SensorError {
     /// An input (travel, pose) is NaN or infinite.
     #[error("non-finite sensor input: {0}")]
     NonFinite(&'static str),
-}
-
-/// A zero-mean Gaussian sample of standard deviation `sigma` (always draws
-/// one value from `rng`).
-fn gauss(rng: &mut StdRng, sigma: f64) -> f64 {
-    let n: f64 = StandardNormal.sample(rng);
-    sigma * n
 }
 
 /// `Ok(())` if `v` is finite and `>= 0`.

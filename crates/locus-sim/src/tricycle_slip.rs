@@ -41,10 +41,10 @@ use locus_odometry::redundant::{Integration, Odometry, Pose as OdoPose, Reading,
 use locus_odometry::{Libm, Tricycle, wrapping_diff};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
-use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 use crate::closed_loop::Error;
+use crate::noise::gauss;
 use crate::robot::{Command, Kinematics, Pose, Robot, Slip, SlipSchedule, Wheel};
 use crate::scenario::{Record, Sample, Summary, Tally};
 use crate::sensors::{Encoder, Laser};
@@ -402,12 +402,6 @@ impl Record for TricycleSlipRecord {
     }
 }
 
-/// A draw from `N(0, std^2)` (always draws one value).
-fn gauss(rng: &mut StdRng, std: f64) -> f64 {
-    let n: f64 = StandardNormal.sample(rng);
-    std * n
-}
-
 /// The four walls of the room `[x_min, y_min, x_max, y_max]` (m).
 pub fn room(r: [f64; 4]) -> World {
     let [x0, y0, x1, y1] = r;
@@ -595,10 +589,7 @@ pub fn run_tricycle_slip(
                 truth.y - x[1],
                 wrap_angle(truth.theta - x[2]),
             );
-            let nees = belief
-                .p
-                .cholesky()
-                .map_or(f64::INFINITY, |c| e.dot(&c.solve(&e)));
+            let nees = locus_eval::nees(&e, &belief.p);
             let p = &belief.p;
             let mut covariance = [[0.0; 3]; 3];
             for (i, row) in covariance.iter_mut().enumerate() {

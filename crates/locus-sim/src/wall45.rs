@@ -62,10 +62,10 @@ use locus_models::laser_wall::{BeamLimits, LaserMount, LaserRange, LaserWallPape
 use locus_models::skid_steer::{SkidSteer, TreadSpeeds};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
-use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 use crate::closed_loop::Error;
+use crate::noise::gauss;
 use crate::robot::{Command, Kinematics, Pose, Robot};
 use crate::scenario::{Record, Sample, Summary, Tally};
 use crate::sensors::Laser;
@@ -427,21 +427,15 @@ fn path(cfg: &Wall45Config) -> Vec<Segment> {
     out
 }
 
-/// A draw from `N(0, std^2)` (always draws one value).
-fn gauss(rng: &mut StdRng, std: f64) -> f64 {
-    let n: f64 = StandardNormal.sample(rng);
-    std * n
-}
-
-/// NEES `e^T P^-1 e` of `x` against `truth` (heading wrapped); infinite if
-/// `P` is not positive definite.
+/// NEES `e^T P^-1 e` of `x` against `truth` (heading wrapped); NaN if `P`
+/// is not positive definite.
 fn nees(x: &Vector3<f64>, p: &Matrix3<f64>, truth: &Vector3<f64>) -> f64 {
     let e = Vector3::new(
         truth[0] - x[0],
         truth[1] - x[1],
         wrap_angle(truth[2] - x[2]),
     );
-    p.cholesky().map_or(f64::INFINITY, |c| e.dot(&c.solve(&e)))
+    locus_eval::nees(&e, p)
 }
 
 /// Runs `wall45` with `cfg` from `seed`, calling `sink` with every step's
