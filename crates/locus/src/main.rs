@@ -10,6 +10,7 @@ mod guide;
 mod host;
 mod hw;
 mod link_scenario;
+mod metrics;
 mod output;
 mod plot;
 mod replay;

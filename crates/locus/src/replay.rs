@@ -18,9 +18,11 @@ use locus_logs::mrclam::Dataset;
 use locus_models::laser_wall::Segment;
 use locus_replay::{Config, Log, Report, replay};
 use locus_sim::scenario::Sample;
+use serde::Serialize;
 
+use crate::metrics::{self, RunMetrics, Settings};
 use crate::output::print_out;
-use crate::run::{Info, files_written, json_str, metrics_json_with, num, summary_tables};
+use crate::run::{Info, files_written, summary_tables};
 
 /// Arguments of `locus replay`.
 #[derive(ClapArgs, Debug)]
@@ -214,12 +216,14 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path) -> Result<()> {
         walls: crosses(log),
         map_label: "landmarks",
     };
-    let metrics_path = out.join("metrics.json");
-    fs::write(
-        &metrics_path,
-        metrics_json_with(&info, None, &report.summary, extra_metrics(cfg, &report)),
-    )
-    .with_context(|| format!("writing {}", metrics_path.display()))?;
+    let metrics_path = metrics::write(
+        out,
+        &RunMetrics {
+            settings: Settings::of(&info),
+            summary: report.summary,
+            extra: ReplayMetrics::new(cfg, &report),
+        },
+    )?;
 
     let pictures = if common.no_plots || samples.is_empty() {
         Vec::new()
@@ -295,30 +299,57 @@ fn counts_table(cfg: &Config, r: &Report) -> Table {
     t
 }
 
-fn extra_metrics(cfg: &Config, r: &Report) -> Vec<(&'static str, String)> {
-    vec![
-        ("source", json_str("replay")),
-        (
-            "gate_confidence",
-            cfg.gate.map_or_else(|| "null".into(), num),
-        ),
-        ("q_v_m2_per_s", num(cfg.q_v)),
-        ("q_omega_rad2_per_s", num(cfg.q_omega)),
-        ("sigma_range_m", num(cfg.sigma_range)),
-        ("sigma_bearing_rad", num(cfg.sigma_bearing)),
-        ("v_scale", num(cfg.v_scale)),
-        ("omega_scale", num(cfg.omega_scale)),
-        ("events", r.steps.to_string()),
-        ("compared", r.compared.to_string()),
-        ("sightings", r.sightings.to_string()),
-        ("applied", r.applied.to_string()),
-        ("gated", r.gated.to_string()),
-        ("gated_share", num(r.gated_share())),
-        ("inflations", r.inflations.to_string()),
-        ("robot_sightings", r.robot_sightings.to_string()),
-        ("unknown_sightings", r.unknown_sightings.to_string()),
-        ("not_in_map", r.not_in_map.to_string()),
-        ("late", r.late.to_string()),
-        ("too_late", r.too_late.to_string()),
-    ]
+/// The replay's fields of `metrics.json`, after the summary's: its
+/// settings and counts.
+#[derive(Serialize)]
+struct ReplayMetrics {
+    /// Always `replay`.
+    source: &'static str,
+    /// Chi-square gate confidence; `null` without a gate.
+    gate_confidence: Option<f64>,
+    q_v_m2_per_s: f64,
+    q_omega_rad2_per_s: f64,
+    sigma_range_m: f64,
+    sigma_bearing_rad: f64,
+    v_scale: f64,
+    omega_scale: f64,
+    events: usize,
+    compared: usize,
+    sightings: usize,
+    applied: usize,
+    gated: usize,
+    gated_share: f64,
+    inflations: usize,
+    robot_sightings: usize,
+    unknown_sightings: usize,
+    not_in_map: usize,
+    late: usize,
+    too_late: usize,
+}
+
+impl ReplayMetrics {
+    fn new(cfg: &Config, r: &Report) -> Self {
+        Self {
+            source: "replay",
+            gate_confidence: cfg.gate,
+            q_v_m2_per_s: cfg.q_v,
+            q_omega_rad2_per_s: cfg.q_omega,
+            sigma_range_m: cfg.sigma_range,
+            sigma_bearing_rad: cfg.sigma_bearing,
+            v_scale: cfg.v_scale,
+            omega_scale: cfg.omega_scale,
+            events: r.steps,
+            compared: r.compared,
+            sightings: r.sightings,
+            applied: r.applied,
+            gated: r.gated,
+            gated_share: r.gated_share(),
+            inflations: r.inflations,
+            robot_sightings: r.robot_sightings,
+            unknown_sightings: r.unknown_sightings,
+            not_in_map: r.not_in_map,
+            late: r.late,
+            too_late: r.too_late,
+        }
+    }
 }

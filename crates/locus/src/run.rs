@@ -26,7 +26,9 @@ use locus_sim::scenario::{Record, Sample, Summary};
 use locus_sim::scenario_file::{self, BUILTIN, ScenarioConfig};
 use locus_sim::tricycle_slip::{TricycleSlipRecord, room, run_tricycle_slip};
 use locus_sim::wall45::run_wall45;
+use serde::Serialize;
 
+use crate::metrics::{self, RunMetrics, Settings};
 use crate::output::print_out;
 
 /// The CSV writer is flushed every this many steps (and at the end), so a
@@ -308,9 +310,17 @@ where
     flushed.with_context(|| format!("writing {}", csv_path.display()))?;
     let summary = result.with_context(|| format!("{} run", info.name))?;
 
-    let metrics_path = out.join("metrics.json");
-    fs::write(&metrics_path, metrics_json(info, args.seed, &summary))
-        .with_context(|| format!("writing {}", metrics_path.display()))?;
+    let metrics_path = metrics::write(
+        out,
+        &RunMetrics {
+            settings: Settings {
+                seed: Some(args.seed),
+                ..Settings::of(info)
+            },
+            summary,
+            extra: (),
+        },
+    )?;
 
     let pictures = if args.no_plots {
         Vec::new()
@@ -443,90 +453,39 @@ pub(crate) fn summary_tables(info: &Info, s: &Summary) -> String {
     text
 }
 
-/// A JSON number, or `null` when not finite.
-pub(crate) fn num(v: f64) -> String {
-    if v.is_finite() {
-        format!("{v}")
-    } else {
-        "null".to_string()
+/// The spread of a metric over Monte Carlo runs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+struct Spread {
+    mean: f64,
+    /// Sample standard deviation (n - 1; 0 for one value).
+    std: f64,
+    min: f64,
+    max: f64,
+}
+
+impl Spread {
+    /// The spread of `values`.
+    #[allow(clippy::cast_precision_loss)]
+    fn of(values: &[f64]) -> Self {
+        let n = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / n;
+        let var = if values.len() > 1 {
+            values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1.0)
+        } else {
+            0.0
+        };
+        Self {
+            mean,
+            std: var.sqrt(),
+            min: values.iter().copied().fold(f64::INFINITY, f64::min),
+            max: values.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        }
     }
-}
 
-/// A JSON string literal (quotes and backslashes escaped).
-pub(crate) fn json_str(v: &str) -> String {
-    format!("\"{}\"", v.replace('\\', "\\\\").replace('"', "\\\""))
-}
-
-/// The settings that open both `metrics.json` files.
-fn settings(info: &Info) -> Vec<(&'static str, String)> {
-    let mut fields = vec![("scenario", json_str(&info.name)), ("dt_s", num(info.dt))];
-    if let Some(laps) = info.laps {
-        fields.push(("laps", laps.to_string()));
+    /// Mean, standard deviation, min and max, for a table row.
+    fn figures(self) -> [f64; 4] {
+        [self.mean, self.std, self.min, self.max]
     }
-    fields
-}
-
-/// `metrics.json`: the scenario, seed, main settings and the summary (SI).
-fn metrics_json(info: &Info, seed: u64, s: &Summary) -> String {
-    metrics_json_with(info, Some(seed), s, Vec::new())
-}
-
-/// `metrics.json` with an optional seed and `extra` fields (already JSON
-/// values) after the summary's; shared with `locus replay`.
-pub(crate) fn metrics_json_with(
-    info: &Info,
-    seed: Option<u64>,
-    s: &Summary,
-    extra: Vec<(&'static str, String)>,
-) -> String {
-    let mut fields = settings(info);
-    if let Some(seed) = seed {
-        fields.insert(1, ("seed", seed.to_string()));
-    }
-    fields.extend([
-        ("steps", s.steps.to_string()),
-        ("sim_time_s", num(s.sim_time)),
-        ("laps_completed", s.laps_completed.to_string()),
-        ("ekf_position_rmse_m", num(s.ekf_position_rmse)),
-        ("ekf_heading_rmse_rad", num(s.ekf_heading_rmse)),
-        ("ekf_max_position_error_m", num(s.ekf_max_position_error)),
-        ("odometry_position_rmse_m", num(s.odometry_position_rmse)),
-        ("odometry_heading_rmse_rad", num(s.odometry_heading_rmse)),
-        (
-            "odometry_max_position_error_m",
-            num(s.odometry_max_position_error),
-        ),
-        ("mean_nees", num(s.mean_nees)),
-        ("nees_in_95_interval_share", num(s.nees_in_interval)),
-        ("ir_readings", s.readings.to_string()),
-        ("associated", s.associated.to_string()),
-        ("corrections", s.corrections.to_string()),
-        ("acceptance_share", num(s.acceptance)),
-        ("wall_clock_s", num(s.wall_clock)),
-        ("nees_dof", s.nees_dof.to_string()),
-        ("real_time_factor", num(s.real_time_factor)),
-    ]);
-    fields.extend(extra);
-    let body: Vec<String> = fields
-        .iter()
-        .map(|(k, v)| format!("  \"{k}\": {v}"))
-        .collect();
-    format!("{{\n{}\n}}\n", body.join(",\n"))
-}
-
-/// Mean, sample standard deviation (n - 1; 0 for one value), min and max.
-#[allow(clippy::cast_precision_loss)]
-fn stats(values: &[f64]) -> [f64; 4] {
-    let n = values.len() as f64;
-    let mean = values.iter().sum::<f64>() / n;
-    let var = if values.len() > 1 {
-        values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1.0)
-    } else {
-        0.0
-    };
-    let min = values.iter().copied().fold(f64::INFINITY, f64::min);
-    let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    [mean, var.sqrt(), min, max]
 }
 
 /// Reads one metric from a run's summary (SI).
@@ -624,9 +583,7 @@ where
     let runs_path = out.join("runs.csv");
     fs::write(&runs_path, runs_csv(&runs))
         .with_context(|| format!("writing {}", runs_path.display()))?;
-    let metrics_path = out.join("metrics.json");
-    fs::write(&metrics_path, monte_carlo_json(info, args.seed, &runs))
-        .with_context(|| format!("writing {}", metrics_path.display()))?;
+    let metrics_path = metrics::write(out, &monte_carlo_metrics(info, args.seed, &runs))?;
 
     let laps = info
         .laps
@@ -656,7 +613,7 @@ where
             .replace("{dof}", &dof.to_string())
             .replace("{estimator}", info.estimator);
         let mut row = vec![label];
-        row.extend(stats(&values).iter().map(|v| fig(*v, m.scale, 2)));
+        row.extend(Spread::of(&values).figures().map(|v| fig(v, m.scale, 2)));
         table.add_row(row);
     }
     text.push_str(&format!("{table}\n"));
@@ -709,39 +666,51 @@ fn runs_csv(runs: &[(u64, Summary)]) -> String {
     csv
 }
 
-/// Aggregate `metrics.json` of a Monte Carlo: settings, then
-/// `{mean, std, min, max}` over runs of each metric (SI; std is n - 1).
-fn monte_carlo_json(info: &Info, first_seed: u64, runs: &[(u64, Summary)]) -> String {
-    let mut fields = settings(info);
-    fields.insert(1, ("first_seed", first_seed.to_string()));
-    fields.insert(2, ("runs", runs.len().to_string()));
+/// Aggregate `metrics.json` of a Monte Carlo: settings, then the
+/// [`Spread`] over runs of each metric (SI).
+#[derive(Serialize)]
+struct MonteCarloMetrics<'a> {
+    #[serde(flatten)]
+    settings: Settings<'a>,
+    #[serde(flatten, serialize_with = "serialize_in_order")]
+    spreads: Vec<(&'static str, Spread)>,
+}
+
+/// Key-value pairs as a map, in their order.
+fn serialize_in_order<S: serde::Serializer>(
+    pairs: &[(&'static str, Spread)],
+    serializer: S,
+) -> Result<S::Ok, S::Error> {
+    serializer.collect_map(pairs.iter().map(|(k, v)| (k, v)))
+}
+
+/// The [`MonteCarloMetrics`] of `runs` from `first_seed`.
+fn monte_carlo_metrics<'a>(
+    info: &'a Info,
+    first_seed: u64,
+    runs: &[(u64, Summary)],
+) -> MonteCarloMetrics<'a> {
     let extra: [(&str, Getter); 2] = [
         ("ekf_max_position_error_m", |s| s.ekf_max_position_error),
         ("nees_in_95_interval_share", |s| s.nees_in_interval),
     ];
-    let all = METRICS
+    let spreads = METRICS
         .iter()
         .map(|m| (m.key, m.get))
-        .chain(extra.iter().copied());
-    for (key, get) in all {
-        let values: Vec<f64> = runs.iter().map(|(_, s)| get(s)).collect();
-        let [mean, std, min, max] = stats(&values);
-        fields.push((
-            key,
-            format!(
-                "{{ \"mean\": {}, \"std\": {}, \"min\": {}, \"max\": {} }}",
-                num(mean),
-                num(std),
-                num(min),
-                num(max)
-            ),
-        ));
-    }
-    let body: Vec<String> = fields
-        .iter()
-        .map(|(k, v)| format!("  \"{k}\": {v}"))
+        .chain(extra.iter().copied())
+        .map(|(key, get)| {
+            let values: Vec<f64> = runs.iter().map(|(_, s)| get(s)).collect();
+            (key, Spread::of(&values))
+        })
         .collect();
-    format!("{{\n{}\n}}\n", body.join(",\n"))
+    MonteCarloMetrics {
+        settings: Settings {
+            first_seed: Some(first_seed),
+            runs: Some(runs.len()),
+            ..Settings::of(info)
+        },
+        spreads,
+    }
 }
 
 #[cfg(test)]
