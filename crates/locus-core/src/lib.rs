@@ -81,3 +81,9 @@ mod tests {
         assert_eq!(wrap_angle(0.25f32), 0.25f32);
     }
 }
+
+/// The repository README's examples, compiled and run as doctests
+/// (`cargo test -p locus-core --doc`).
+#[cfg(doctest)]
+#[doc = include_str!("../../../README.md")]
+pub struct ReadmeDoctests;
