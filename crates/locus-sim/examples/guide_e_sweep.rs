@@ -1,12 +1,14 @@
-//! Guide step e) against its Q: why no Q meets both of the spec's e)
-//! criteria (README, "locus guide").
+//! Guide step e) against its Q: why a Q large enough for a gain near 1 on
+//! the measured wall coordinate gives a worse position RMSE than step c's
+//! tiny R (the reason of spec section 3's revision of e), 2026-12-01).
 //!
 //! Runs step e's configuration (R = the injected IR noise, no gate) with a
 //! range of `(Q11, Q22)` over the guide's seeds 1..=10, and prints the mean
-//! position gain (`H K`'s measured-coordinate entry) and the position RMSE
-//! beside step c's. `Q22` alone (heading noise) leaves the position gain
-//! near zero however large it is; only `Q11` raises it, and with it the
-//! along-wall coordinate is dragged at every reading.
+//! gain on the measured wall coordinate (`H K`'s first diagonal entry,
+//! `StepRecord::gain[0]`) and the position RMSE beside step c's. `Q22`
+//! alone (heading noise) leaves that gain near zero however large it is;
+//! only `Q11` raises it, and with it the along-wall coordinate is dragged
+//! at every reading.
 //!
 //!     cargo run --release -p locus-sim --example guide_e_sweep
 // A std-only example: the no_std lints of the workspace do not apply.
@@ -15,7 +17,8 @@
 use locus_sim::closed_loop::{Error, SquareConfig, StepRecord, run_square};
 use locus_sim::guide::{RUNS_PER_STEP, step_config};
 
-/// Mean position RMSE (m) and mean position gain over seeds 1..=RUNS_PER_STEP.
+/// Mean position RMSE (m) and mean wall-coordinate gain over seeds
+/// 1..=RUNS_PER_STEP.
 fn measure(cfg: &SquareConfig) -> Result<(f64, f64), Error> {
     let (mut rmse, mut gain) = (0.0, 0.0);
     for seed in 1..=RUNS_PER_STEP {

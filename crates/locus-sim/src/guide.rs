@@ -1,6 +1,7 @@
 //! Paper 001's guided experiment (its section VII.B, steps a to f) on the
 //! `square` scenario, each step with the measurable criterion of spec
-//! section 3 (thresholds \[assumed\] there), measured from the runs.
+//! section 3 as revised on 2026-12-01 (thresholds \[assumed\] there),
+//! measured from the runs.
 //!
 //! Every step is a configured run of [`run_square`] from the same seed
 //! (realistic odometry: quantised encoders, a 0.5 % scale error, slip
@@ -10,17 +11,38 @@
 //!
 //! | step | configuration | criterion |
 //! |---|---|---|
-//! | a | IR unused (odometry only) | trace of the position covariance never decreases, ends > 10x its value after the first side |
+//! | a | IR unused (odometry only) | `det P` (3x3) never decreases (to rounding); the trace of the x-y block ends > 10x its value after the first side |
 //! | b | noise-free IR, R tiny ([`R_TINY`]) | position RMSE < 1 cm |
 //! | c | IR noise 2 cm, R tiny | position RMSE >= 2x that of b |
 //! | d | R = injected noise, Q tiny ([`Q_TINY`]) | final position error within 20 % of a's; mean position gain < 0.05 |
-//! | e | R = injected noise, Q huge ([`Q_HUGE`]) | mean position gain >= 0.9; RMSE within 20 % of c's |
+//! | e | R = injected noise, Q huge ([`Q_HUGE`]) | mean gain on the measured wall coordinate >= 0.9; position RMSE >= c's |
 //! | f | R = injected noise, Q of the defaults, 99 % gate | RMSE below c's, d's and e's; the square-ideal NEES test with f's Q and R passes |
 //!
 //! The *gain* of a correction is the diagonal of `H K` (see
-//! [`StepRecord::gain`]): the share of the position innovation moved into
-//! the measured coordinate (0 when a gate rejects it); the mean is over
-//! the associated readings.
+//! [`StepRecord::gain`]): the share of each innovation component moved into
+//! the estimate of the coordinate it measures (0 when a gate rejects the
+//! reading, 1 when it is taken as is); the mean is over the associated
+//! readings. The guide uses its first entry, `gain[0]`, as the gain on *the
+//! measured wall coordinate*: in the IR pair model
+//! (`locus_models::ir_wall`) the first component of `z` is the robot
+//! coordinate across the wall, `w - side * D` (x for the walls `x = +-Lw`,
+//! y for `y = +-Lw`), and the first row of `H` is `[C1, C2, 0]`, which picks
+//! exactly that coordinate; the second entry is the heading's. This is also
+//! d)'s "gain on the position components": the IR pair observes only one
+//! position component at a time.
+//!
+//! Why a) checks `det P` rather than the trace the paper's wording
+//! suggests (spec revision): the trace of the x-y block can fall without
+//! any correction (the heading-position correlation built on one side
+//! shears into the other after a turn), while `det P` cannot: the
+//! prediction is `P' = A P A^T + W Q W^T` with `det A = 1` and `Q >= 0`.
+//! Why e) compares the RMSE with `>=` rather than "within 20 %": paper
+//! 001's `Q` is the noise of the odometry increments, so a `Q` large enough
+//! for a gain near 1 on the wall coordinate also inflates the unobserved
+//! along-wall coordinate, which each reading then drags by about
+//! `nu cot(psi)` (`psi` the estimate's angle to the wall): a huge `Q` is
+//! worse than a tiny `R` (`cargo run --release -p locus-sim --example
+//! guide_e_sweep` sweeps `Q`).
 
 use core::fmt::Write as _;
 
@@ -42,16 +64,6 @@ pub const Q_TINY: (f64, f64) = (1e-14, 1e-14);
 /// 1 mm step) and `Q22` (rad^2 per step): far above the measurement noise,
 /// so the gain on the position is near 1.
 pub const Q_HUGE: (f64, f64) = (1.0, 1e4);
-
-/// Why step e fails on this model, for a reader of the guide's verdict
-/// (the README, section `locus guide`, gives the derivation and a sweep
-/// over Q).
-pub const E_NOTE: &str = "e)'s two [assumed] thresholds cannot both hold for paper 001's model: \
-    Q is the noise of the odometry increments (d, dtheta), so Q22 alone leaves the gain on the \
-    measured wall coordinate near 0 (the IR heading explains it), and the Q11 that lifts the gain \
-    to 0.9 also drags the unobserved along-wall coordinate by about nu cot(psi) per reading \
-    (psi: the estimate's angle to the wall). Sweep: cargo run --release -p locus-sim --example \
-    guide_e_sweep";
 
 /// Runs per step (seeds `seed..seed + RUNS_PER_STEP`); the figures are
 /// means over them (a single lost-robot run is chaotic).
@@ -84,18 +96,53 @@ struct Run {
     summary: Summary,
     /// Position error at the last step (m).
     final_error: f64,
-    /// Mean of `H K`'s position entry over the associated readings.
+    /// Mean of `H K`'s entry for the measured wall coordinate
+    /// ([`StepRecord::gain`]`[0]`) over the associated readings.
     mean_gain: f64,
     /// Steps where the trace of the position covariance decreased.
     trace_decreases: usize,
     /// Largest relative one-step decrease of that trace.
     trace_max_drop: f64,
-    /// Steps where `det P` (3x3) decreased by more than 1e-9 relative.
+    /// Steps where `det P` (3x3) decreased by more than its rounding
+    /// error ([`DET_ROUNDING`]).
     det_decreases: usize,
+    /// Smallest one-step relative change of `det P` (negative if it fell).
+    det_min_change: f64,
     /// Trace of the position covariance after the first side (m^2).
     trace_first_side: f64,
     /// Trace of the position covariance at the end (m^2).
     trace_end: f64,
+}
+
+/// The tolerance of a)'s "`det P` never decreases (to rounding)", in
+/// units of `f64::EPSILON * perm(|P|)`, where `perm(|P|)` is the sum of the
+/// absolute values of the six products of the 3x3 cofactor expansion.
+///
+/// Why this scale: the computed determinant is that sum of six triple
+/// products, and its rounding error is bounded by the rounding of the
+/// terms, not of the result: about `5 u perm(|P|)` for the evaluation (two
+/// multiplications per term, five additions; `u = EPSILON / 2`) plus `3 u
+/// perm(|P|)` for the rounding of `P`'s stored entries, `8 u = 4 EPSILON`
+/// in all. Relative to `det P` this is `4 EPSILON perm(|P|) / det P`: a few
+/// ulps for a near-diagonal `P`, up to about 130 ulps (3e-14) on step a's
+/// runs, where `perm(|P|) / det P` reaches about 32 as the heading and
+/// position errors correlate. A plain "few ulps of `det P`" would be
+/// smaller than the determinant's own rounding error there. The bound is
+/// fixed a priori; on the default seed `det P` in fact rises by at least
+/// 0.02 % every step (printed), ten orders of magnitude above it.
+pub const DET_ROUNDING: f64 = 4.0;
+
+/// `perm(|P|)`: the sum of the absolute values of the six products of the
+/// cofactor expansion of the 3x3 `p` (the scale of its determinant's
+/// rounding error).
+fn abs_permanent(p: &[[f64; 3]; 3]) -> f64 {
+    let a = |i: usize, j: usize| p[i][j].abs();
+    a(0, 0) * a(1, 1) * a(2, 2)
+        + a(0, 1) * a(1, 2) * a(2, 0)
+        + a(0, 2) * a(1, 0) * a(2, 1)
+        + a(0, 2) * a(1, 1) * a(2, 0)
+        + a(0, 0) * a(1, 2) * a(2, 1)
+        + a(0, 1) * a(1, 0) * a(2, 2)
 }
 
 /// The configuration of guide step `step` (`'a'` to `'f'`, the table
@@ -147,12 +194,16 @@ pub fn step_config(step: char, base: &SquareConfig) -> Option<SquareConfig> {
 #[allow(clippy::cast_precision_loss)]
 fn measure(cfg: &SquareConfig, seed: u64) -> Result<Run, Error> {
     let mut traces: Vec<f64> = Vec::new();
-    let mut dets: Vec<f64> = Vec::new();
+    // (det P, perm(|P|)) per step.
+    let mut dets: Vec<(f64, f64)> = Vec::new();
     let mut last = None;
     let (mut gain_sum, mut gains) = (0.0, 0usize);
     let summary = run_square(cfg, seed, &mut |r: &StepRecord| {
         traces.push(r.ekf_cov[0][0] + r.ekf_cov[1][1]);
-        dets.push(locus_core::nalgebra::Matrix3::from_fn(|i, j| r.ekf_cov[i][j]).determinant());
+        dets.push((
+            locus_core::nalgebra::Matrix3::from_fn(|i, j| r.ekf_cov[i][j]).determinant(),
+            abs_permanent(&r.ekf_cov),
+        ));
         if let Some(g) = r.gain {
             gain_sum += g[0];
             gains += 1;
@@ -169,8 +220,15 @@ fn measure(cfg: &SquareConfig, seed: u64) -> Result<Run, Error> {
         .fold(0.0, f64::max);
     let det_decreases = dets
         .windows(2)
-        .filter(|w| w[1] < w[0] * (1.0 - 1e-9))
+        .filter(|w| {
+            let rounding = DET_ROUNDING * f64::EPSILON * w[0].1.max(w[1].1);
+            w[1].0 < w[0].0 - rounding
+        })
         .count();
+    let det_min_change = dets
+        .windows(2)
+        .map(|w| (w[1].0 - w[0].0) / w[0].0)
+        .fold(f64::INFINITY, f64::min);
     Ok(Run {
         summary,
         final_error,
@@ -182,6 +240,7 @@ fn measure(cfg: &SquareConfig, seed: u64) -> Result<Run, Error> {
         trace_decreases,
         trace_max_drop,
         det_decreases,
+        det_min_change,
         trace_first_side: traces.get(side).copied().unwrap_or(f64::NAN),
         trace_end: traces.last().copied().unwrap_or(f64::NAN),
     })
@@ -318,6 +377,11 @@ pub fn run_guide(seed: u64) -> Result<Vec<GuideStep>, Error> {
 
     let mut steps = Vec::with_capacity(6);
     let det_decreases: usize = a.0.iter().map(|r| r.det_decreases).sum();
+    let det_checked: usize = a.0.iter().map(|r| r.summary.steps.saturating_sub(1)).sum();
+    let det_min_change =
+        a.0.iter()
+            .map(|r| r.det_min_change)
+            .fold(f64::INFINITY, f64::min);
     let trace_decreases: usize = a.0.iter().map(|r| r.trace_decreases).sum();
     let trace_drop = a.0.iter().map(|r| r.trace_max_drop).fold(0.0, f64::max);
     let growth =
@@ -329,13 +393,16 @@ pub fn run_guide(seed: u64) -> Result<Vec<GuideStep>, Error> {
         setup: "odometry only (IR unused)",
         demonstrates: "the covariance grows without bound; the robot gets lost",
         measured: format!(
-            "det P fell at {det_decreases} steps; trace(P_xy) end / after side 1 >= {growth:.1}x; \
-             final error {:.1} cm (spec's check: trace(P_xy) fell at {trace_decreases} steps, \
-             at most {:.3} % per step)",
+            "det P fell at {det_decreases} of {det_checked} steps (smallest one-step change \
+             {:+.3} %); trace(P_xy) end / after side 1 >= {growth:.1}x (least of the runs); \
+             final error {:.1} cm (trace(P_xy) itself fell at {trace_decreases} steps, by at \
+             most {:.3} % per step: why the spec checks det P)",
+            100.0 * det_min_change,
             cm(a.mean(|r| r.final_error)),
             100.0 * trace_drop
         ),
-        criterion: "det P never falls; trace(P_xy) ends > 10x its value after the first side",
+        criterion: "det P (3x3) never falls (to rounding: 4 eps perm|P|); trace(P_xy) ends > 10x \
+                    its value after the first side",
         passed: det_decreases == 0 && growth > 10.0,
     });
     steps.push(GuideStep {
@@ -371,20 +438,20 @@ pub fn run_guide(seed: u64) -> Result<Vec<GuideStep>, Error> {
         criterion: "final error within 20 % of a's; mean position gain < 0.05",
         passed: da <= 0.2 && d_gain < 0.05,
     });
-    let ec = rel(e.rmse(), c.rmse());
+    let ec = e.rmse() / c.rmse();
     let e_gain = e.mean(|r| r.mean_gain);
     steps.push(GuideStep {
         step: 'e',
         setup: "R = injected noise, Q huge",
-        demonstrates: "the filter jumps to each measurement, like b) and c)",
+        demonstrates: "the filter jumps to each measurement, like b) and c), and a huge Q is \
+                       worse than a tiny R",
         measured: format!(
-            "mean position gain {e_gain:.3}; RMSE {:.2} cm vs c's {:.2} cm ({:.0} % off)",
+            "mean wall-coordinate gain {e_gain:.3}; position RMSE {:.2} cm = {ec:.2}x c's {:.2} cm",
             cm(e.rmse()),
             cm(c.rmse()),
-            100.0 * ec
         ),
-        criterion: "mean position gain >= 0.9; RMSE within 20 % of c's",
-        passed: e_gain >= 0.9 && ec <= 0.2,
+        criterion: "mean gain on the measured wall coordinate >= 0.9; position RMSE >= c's",
+        passed: e_gain >= 0.9 && e.rmse() >= c.rmse(),
     });
     let best_other = [&c, &d, &e]
         .iter()

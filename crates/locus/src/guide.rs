@@ -1,6 +1,7 @@
 //! `locus guide`: paper 001's guided experiment (steps a to f) with the
-//! measurable criteria of spec section 3, run on the `square` scenario
-//! (`locus_sim::guide`), as a table with PASS/FAIL per step.
+//! measurable criteria of spec section 3 (revised 2026-12-01), run on the
+//! `square` scenario (`locus_sim::guide`), as a table with PASS/FAIL per
+//! step.
 
 use anyhow::{Result, bail};
 use clap::Args;
@@ -57,9 +58,6 @@ pub fn run(args: &GuideArgs) -> Result<()> {
             .saturating_add(locus_sim::guide::RUNS_PER_STEP - 1),
         locus_sim::guide::RUNS_PER_STEP
     ))?;
-    if steps.iter().any(|s| s.step == 'e' && !s.passed) {
-        print_out(&format!("note: {}\n", locus_sim::guide::E_NOTE))?;
-    }
     if !failed.is_empty() {
         bail!(
             "{} of {} steps failed their criterion: {}",
