@@ -15,9 +15,9 @@ use std::time::Instant;
 
 use criterion::{Criterion, Throughput, criterion_group};
 use locus_link::{Command, MAX_PACKET, Receiver, Telemetry};
-use locus_net::host::{HostConfig, run_host};
-use locus_net::robot::{RobotConfig, run_robot};
+use locus_net::host::run_host;
 use locus_sim::closed_loop::SquareConfig;
+use locus_sim::link_robot::{RobotConfig, host_config, run_robot};
 
 /// Robot seconds per wall second: 100 Hz telemetry becomes 10 000 per
 /// second.
@@ -48,10 +48,7 @@ fn load() {
     let start = Instant::now();
     let robot = thread::spawn(move || run_robot(&robot_socket, &cfg).unwrap());
     let host_socket = UdpSocket::bind("127.0.0.1:0").unwrap();
-    let host_cfg = HostConfig {
-        square,
-        ..HostConfig::default()
-    };
+    let host_cfg = host_config(&square);
     let host = run_host(&host_socket, robot_addr, &host_cfg, &mut |_| {}).unwrap();
     let robot = robot.join().unwrap();
     let wall = start.elapsed().as_secs_f64() - host_cfg.quiet.as_secs_f64();

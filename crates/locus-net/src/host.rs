@@ -2,9 +2,12 @@
 //! protocol (`docs/protocol.md`).
 //!
 //! The filter is paper 001's [`Localiser`] on the link's 32-bit wrapping
-//! encoder counts, configured by a [`SquareConfig`] (wheelbase, encoder,
-//! IR pair, `Q`, `R`, gate, path controller): the loop of
-//! [`locus_sim::closed_loop::run_square`], with the robot across a socket.
+//! encoder counts, built from a [`LocaliserConfig`] (wheelbase, encoder, IR
+//! pair, `Q`, `R`, gate, initial belief); the IR pair is associated with
+//! the arena walls the caller gives, and the path controller
+//! ([`FollowPath::square`]) drives the laps. The host knows nothing of the
+//! robot beyond the protocol: a simulator (`locus_sim::link_robot`) or a
+//! real robot.
 //!
 //! # Loop
 //! 1. Send a zero-speed command (ack [`NO_ACK`]) every `resend` until the
@@ -32,9 +35,7 @@ use std::time::Instant;
 use locus_control::{Controller, FollowPath, wheel_speeds};
 use locus_link::clock::ClockFit;
 use locus_link::{ClockEstimator, Command, Counters, MAX_PACKET, NO_ACK, Receiver, Status};
-use locus_models::Localiser;
-use locus_sim::closed_loop::SquareConfig;
-use locus_sim::world::World;
+use locus_models::{Localiser, LocaliserConfig, Segment};
 
 use crate::{Error, at_least_1us, is_timeout};
 
@@ -42,13 +43,24 @@ use crate::{Error, at_least_1us, is_timeout};
 const CLOCK_WINDOW: usize = 64;
 
 /// Width of the link's encoder counts (bits): they wrap modulo `2^32`.
-const COUNTER_BITS: u32 = 32;
+/// [`HostConfig::localiser`] must use it.
+pub const COUNTER_BITS: u32 = 32;
 
 /// Configuration of the host.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HostConfig {
-    /// The robot, its sensors, the filter and the controller.
-    pub square: SquareConfig,
+    /// The robot's geometry, encoder and IR pair, the filter's `Q`, `R`,
+    /// gate and initial belief; `counter_bits` must be [`COUNTER_BITS`].
+    pub localiser: LocaliserConfig<f64>,
+    /// Whether the filter uses the IR readings (`false`: odometry only).
+    pub use_ir: bool,
+    /// The walls the IR pair is associated with (m, world frame): the
+    /// square arena around the path.
+    pub walls: [Segment<f64>; 4],
+    /// The path controller's parameters.
+    pub control: locus_control::Config,
+    /// Laps of the square path to drive (>= 1).
+    pub laps: usize,
     /// Interval of the handshake's zero-speed command. Default 50 ms.
     pub resend: Duration,
     /// Wall time to wait for the robot's first telemetry. Default 10 s.
@@ -61,14 +73,76 @@ pub struct HostConfig {
     pub clock_bucket: f64,
 }
 
-impl Default for HostConfig {
-    fn default() -> Self {
+impl HostConfig {
+    /// A host running `localiser` in the arena `walls`, with IR, the
+    /// default path controller, 2 laps and the default timing.
+    pub fn new(localiser: LocaliserConfig<f64>, walls: [Segment<f64>; 4]) -> Self {
         Self {
-            square: SquareConfig::default(),
+            localiser,
+            use_ir: true,
+            walls,
+            control: locus_control::Config::default(),
+            laps: 2,
             resend: Duration::from_millis(50),
             handshake: Duration::from_secs(10),
             quiet: Duration::from_millis(500),
             clock_bucket: 0.05,
+        }
+    }
+
+    /// Checks the values the host relies on.
+    ///
+    /// # Errors
+    /// [`Error::Config`] naming the first invalid value.
+    pub fn validate(&self) -> Result<(), Error> {
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        let l = &self.localiser;
+        let c = &self.control;
+        let checks = [
+            (self.laps > 0, "laps must be >= 1"),
+            (
+                l.counter_bits == COUNTER_BITS,
+                "localiser.counter_bits must be 32 (the link's counts)",
+            ),
+            (
+                [l.wheelbase, l.wheel_radius, l.encoder_gear, l.ir_spacing]
+                    .into_iter()
+                    .all(pos)
+                    && l.encoder_lines > 0,
+                "localiser geometry (wheelbase, wheel_radius, encoder_lines, encoder_gear, ir_spacing) must be finite and > 0",
+            ),
+            (
+                [l.association_range, l.q11, l.q22, l.r11, l.r22]
+                    .into_iter()
+                    .all(pos),
+                "localiser association_range, q11, q22, r11, r22 must be finite and > 0",
+            ),
+            (
+                l.start.iter().all(|v| v.is_finite()) && l.initial_std.into_iter().all(pos),
+                "localiser start must be finite and initial_std finite and > 0",
+            ),
+            (
+                [
+                    c.v_ref,
+                    c.w_ref,
+                    c.k_cross,
+                    c.k_heading,
+                    c.k_pos,
+                    c.pos_tol,
+                    c.heading_tol,
+                ]
+                .into_iter()
+                .all(pos),
+                "control values must be finite and > 0",
+            ),
+            (
+                pos(self.clock_bucket),
+                "clock_bucket must be finite and > 0 s",
+            ),
+        ];
+        match checks.into_iter().find(|(ok, _)| !ok) {
+            Some((_, what)) => Err(Error::Config(what)),
+            None => Ok(()),
         }
     }
 }
@@ -129,10 +203,9 @@ pub fn run_host(
     cfg: &HostConfig,
     on_step: &mut impl FnMut(&HostStep),
 ) -> Result<HostReport, Error> {
-    cfg.square.validate()?;
-    let mut localiser: Localiser<f64> = cfg.square.localiser(COUNTER_BITS).localiser()?;
-    let walls = World::square_arena().walls;
-    let mut controller = FollowPath::square(cfg.square.control);
+    cfg.validate()?;
+    let mut localiser: Localiser<f64> = cfg.localiser.localiser()?;
+    let mut controller = FollowPath::square(cfg.control);
     let mut receiver = Receiver::new();
     let mut clock = ClockEstimator::<CLOCK_WINDOW>::new(cfg.clock_bucket);
     let mut buf = [0u8; 2048];
@@ -219,9 +292,9 @@ pub fn run_host(
         let predicted = localiser
             .counts(t.counts, skipped.saturating_add(1))?
             .is_some();
-        let corrected = match t.ir.filter(|_| predicted && cfg.square.use_ir) {
+        let corrected = match t.ir.filter(|_| predicted && cfg.use_ir) {
             Some([ds1, ds2]) => localiser
-                .ir(&walls, [f64::from(ds1), f64::from(ds2)])?
+                .ir(&cfg.walls, [f64::from(ds1), f64::from(ds2)])?
                 .applied(),
             None => false,
         };
@@ -235,7 +308,7 @@ pub fn run_host(
             let mut command = controller.command(est);
             if command.done {
                 report.laps += 1;
-                if report.laps >= cfg.square.laps {
+                if report.laps >= cfg.laps {
                     done = true;
                 } else {
                     controller.reset();
@@ -243,7 +316,7 @@ pub fn run_host(
                 }
             }
             if !done {
-                let (v1, v2) = wheel_speeds(command, cfg.square.wheelbase);
+                let (v1, v2) = wheel_speeds(command, cfg.localiser.wheelbase);
                 let (right, left) = (v1 as f32, v2 as f32);
                 send(socket, t.sequence, right, left)?;
                 report.commands_sent += 1;

@@ -1,21 +1,19 @@
 //! The robot link of paper 001 over UDP (protocol: `docs/protocol.md`,
 //! codec: [`locus_link`]).
 //!
-//! - [`robot`]: the `square` simulator as a robot endpoint. It ticks at the
-//!   sensor rate (faster than real time with a time scale), sends telemetry,
-//!   applies the wheel commands it receives and stops the wheels when they
-//!   stop coming (watchdog).
 //! - [`host`]: the localisation and control loop for any robot that speaks
 //!   the protocol: decode, classify, predict (through gaps), correct with
 //!   the IR pair, run the path controller, send commands; it reports the
 //!   receiver's counters and the clock estimate.
+//! - The UDP plumbing every endpoint shares: the [`Error`] type,
+//!   [`at_least_1us`] and [`is_timeout`]. The simulated robot endpoint
+//!   (`locus_sim::link_robot`) builds on them.
 //!
-//! Both take an already bound [`std::net::UdpSocket`], so a caller chooses
-//! the address (the CLI binds `127.0.0.1` by default) and tests can put a
-//! proxy between them.
+//! An endpoint takes an already bound [`std::net::UdpSocket`], so a caller
+//! chooses the address (the CLI binds `127.0.0.1` by default) and tests can
+//! put a proxy between the endpoints.
 
 pub mod host;
-pub mod robot;
 
 use core::time::Duration;
 
@@ -29,9 +27,6 @@ pub enum Error {
     /// A packet could not be encoded (a non-finite value).
     #[error("encode: {0}")]
     Encode(locus_link::Error),
-    /// The simulated robot or its configuration failed.
-    #[error("simulator: {0}")]
-    Sim(#[from] locus_sim::closed_loop::Error),
     /// The filter failed.
     #[error("filter: {0}")]
     Filter(#[from] locus_core::Error),
@@ -45,12 +40,13 @@ pub enum Error {
 
 /// `d` clamped to at least 1 us (a zero read timeout is an error for
 /// [`std::net::UdpSocket::set_read_timeout`]).
-pub(crate) fn at_least_1us(d: Duration) -> Duration {
+pub fn at_least_1us(d: Duration) -> Duration {
     d.max(Duration::from_micros(1))
 }
 
-/// `true` for the error kinds a read timeout produces.
-pub(crate) fn is_timeout(e: &std::io::Error) -> bool {
+/// `true` for the error kinds a read timeout (or a non-blocking read with
+/// nothing to read) produces.
+pub fn is_timeout(e: &std::io::Error) -> bool {
     matches!(
         e.kind(),
         std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut

@@ -1,7 +1,9 @@
 //! The robot link on real UDP sockets on loopback: the `square` run through
 //! the link against the in-process run, and the same run through a
 //! fault-injecting proxy (loss, duplicates, reordering, corruption) whose
-//! injections the host's counters must match exactly.
+//! injections the host's counters must match exactly; the robot's
+//! watchdog; the host's configuration check. The robot endpoint is the
+//! simulator's (`locus_sim::link_robot`).
 
 extern crate alloc;
 
@@ -15,8 +17,8 @@ use std::thread;
 
 use locus_link::Telemetry;
 use locus_net::host::{HostConfig, HostReport, run_host};
-use locus_net::robot::{RobotConfig, RobotReport, run_robot};
 use locus_sim::closed_loop::{SquareConfig, run_square};
+use locus_sim::link_robot::{RobotConfig, RobotReport, host_config, run_robot};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 
@@ -57,7 +59,7 @@ fn run_link(robot_socket: UdpSocket, host_peer: Option<SocketAddr>) -> (RobotRep
     let host = run_host(
         &host_socket,
         host_peer.unwrap_or(robot_addr),
-        &HostConfig::default(),
+        &host_config(&SquareConfig::default()),
         &mut |_| {},
     )
     .unwrap();
@@ -281,4 +283,24 @@ fn the_watchdog_stops_the_robot_when_commands_stop() {
     assert!((moved - 0.02).abs() < 1e-9, "moved {moved} m");
     // 2 s of robot time without commands at 100 Hz: 200 ticks.
     assert_eq!(report.ticks, 200);
+}
+
+/// The host refuses a configuration it cannot run before sending anything:
+/// counters of another width than the link's, no laps.
+#[test]
+fn the_host_refuses_an_invalid_configuration() {
+    let valid = host_config(&SquareConfig::default());
+    assert!(valid.validate().is_ok());
+    let socket = bind();
+    let nobody = bind().local_addr().unwrap();
+    for cfg in [
+        HostConfig {
+            localiser: SquareConfig::default().localiser(20),
+            ..valid
+        },
+        HostConfig { laps: 0, ..valid },
+    ] {
+        let e = run_host(&socket, nobody, &cfg, &mut |_| {}).unwrap_err();
+        assert!(matches!(e, locus_net::Error::Config(_)), "{e}");
+    }
 }

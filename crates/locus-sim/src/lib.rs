@@ -13,6 +13,7 @@ pub mod closed_loop;
 pub mod firmware_data;
 pub mod guide;
 pub mod hover;
+pub mod link_robot;
 mod noise;
 pub mod robot;
 /// The evaluation types every scenario reports through (defined in

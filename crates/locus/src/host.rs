@@ -6,7 +6,8 @@ use std::net::{ToSocketAddrs, UdpSocket};
 use anyhow::Context;
 use clap::Args as ClapArgs;
 use comfy_table::Table;
-use locus_net::host::{HostConfig, run_host};
+use locus_net::host::run_host;
+use locus_sim::link_robot::host_config;
 
 use crate::link_scenario::square_config;
 
@@ -39,10 +40,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .with_context(|| format!("no address for {}", args.robot))?;
     let socket =
         UdpSocket::bind(&args.bind).with_context(|| format!("binding UDP {}", args.bind))?;
-    let cfg = HostConfig {
-        square,
-        ..HostConfig::default()
-    };
+    let cfg = host_config(&square);
     let verbose = args.verbose;
     let report = run_host(&socket, robot, &cfg, &mut |s| {
         if verbose {

@@ -6,7 +6,7 @@ use std::net::UdpSocket;
 
 use anyhow::Context;
 use clap::Args as ClapArgs;
-use locus_net::robot::{RobotConfig, run_robot};
+use locus_sim::link_robot::{RobotConfig, run_robot};
 
 use crate::link_scenario::square_config;
 

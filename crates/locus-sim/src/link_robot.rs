@@ -1,11 +1,13 @@
-//! The `square` simulator as a robot endpoint.
+//! The `square` simulator as a robot endpoint of the UDP link
+//! (`docs/protocol.md`; the host is [`locus_net::host`]).
 //!
-//! The robot is built exactly as [`locus_sim::closed_loop::run_square`]
+//! The robot is built exactly as [`crate::closed_loop::run_square`]
 //! builds it (same random draws in the same order from the same seed: true
 //! start, slip bumps, then per step the right and left encoders and the IR
 //! pair), so a run through the link with every command on time drives the
 //! same robot as the in-process run. Only the realistic noise model is
-//! simulated (the `square` scenario).
+//! simulated (the `square` scenario). [`host_config`] gives the host
+//! configuration that matches the simulated robot.
 //!
 //! # Loop
 //! 1. Wait (up to `handshake` of wall time) for a first valid command; its
@@ -25,18 +27,57 @@ use std::net::UdpSocket;
 use std::time::Instant;
 
 use locus_link::{Command as LinkCommand, MAX_PACKET, Receiver, Status, Telemetry};
+use locus_net::host::HostConfig;
+use locus_net::{Error as LinkError, at_least_1us, is_timeout};
 use locus_odometry::{Wheel as EncoderWheel, wrapping_diff};
-use locus_sim::closed_loop::{Error as SimError, NoiseModel, SquareConfig};
-use locus_sim::robot::{Command, Pose, Robot};
-use locus_sim::sensors::{Encoder, IrPairSensor, SharpIr};
-use locus_sim::world::World;
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 
-use crate::{Error, at_least_1us, is_timeout};
+use crate::closed_loop::{Error as SimError, NoiseModel, SquareConfig};
+use crate::robot::{Command, Pose, Robot};
+use crate::sensors::{Encoder, IrPairSensor, SharpIr};
+use crate::world::World;
+
+/// Errors of the robot endpoint.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// The link failed: socket, encoding, timeout or an invalid endpoint
+    /// setting.
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// The simulated robot or its configuration failed.
+    #[error("simulator: {0}")]
+    Sim(#[from] SimError),
+}
+
+impl From<std::io::Error> for Error {
+    fn from(e: std::io::Error) -> Self {
+        Self::Link(e.into())
+    }
+}
+
+/// The host configuration for the robot `square` simulates: its localiser
+/// on the link's 32-bit counts, the walls of [`World::square_arena`], its
+/// path controller, laps and `use_ir`, with the host's default timing.
+///
+/// # Panics
+/// Never: the square arena has four walls.
+pub fn host_config(square: &SquareConfig) -> HostConfig {
+    let walls = World::square_arena()
+        .walls
+        .try_into()
+        .expect("the square arena has four walls");
+    HostConfig {
+        use_ir: square.use_ir,
+        control: square.control,
+        laps: square.laps,
+        ..HostConfig::new(square.localiser(locus_net::host::COUNTER_BITS), walls)
+    }
+}
 
 /// Width of the simulated encoders' wrapping counter (bits).
-const COUNTER_BITS: u32 = locus_odometry::counter::PAPER_BITS;
+const ENCODER_BITS: u32 = locus_odometry::counter::PAPER_BITS;
 
 /// Longest sleep between two polls of the socket while waiting for a tick.
 const POLL: Duration = Duration::from_micros(50);
@@ -151,7 +192,7 @@ impl Sim {
             // The firmware extends the 20-bit counter to the protocol's
             // wrapping 32-bit count.
             self.counts[i] =
-                self.counts[i].wrapping_add_signed(wrapping_diff(now, self.last[i], COUNTER_BITS));
+                self.counts[i].wrapping_add_signed(wrapping_diff(now, self.last[i], ENCODER_BITS));
             self.last[i] = now;
         }
         let p = out.pose;
@@ -168,13 +209,13 @@ impl Sim {
 /// Runs the robot endpoint on `socket` until the host goes quiet.
 ///
 /// # Errors
-/// [`Error::Timeout`] if no host command arrives within `handshake`;
-/// socket, configuration and simulator errors.
+/// [`locus_net::Error::Timeout`] (as [`Error::Link`]) if no host command
+/// arrives within `handshake`; socket, configuration and simulator errors.
 #[allow(clippy::cast_precision_loss, clippy::cast_possible_truncation)]
 #[allow(clippy::cast_sign_loss, clippy::too_many_lines)]
 pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, Error> {
     if !(cfg.time_scale.is_finite() && cfg.time_scale > 0.0) {
-        return Err(Error::Config("time_scale must be finite and > 0"));
+        return Err(LinkError::Config("time_scale must be finite and > 0").into());
     }
     let dt = cfg.square.dt;
     let mut sim = Sim::new(&cfg.square, cfg.seed)?;
@@ -187,7 +228,7 @@ pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, E
     let (mut host, mut command): (SocketAddr, LinkCommand) = loop {
         let now = Instant::now();
         if now >= deadline {
-            return Err(Error::Timeout("waiting for the host's first command"));
+            return Err(LinkError::Timeout("waiting for the host's first command").into());
         }
         socket.set_read_timeout(Some(at_least_1us(deadline - now)))?;
         match socket.recv_from(&mut buf) {
@@ -213,7 +254,7 @@ pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, E
     // 2. Telemetry 0.
     let n = Telemetry::new(0, 0)
         .encode(&mut out)
-        .map_err(Error::Encode)?;
+        .map_err(LinkError::Encode)?;
     socket.send_to(&out[..n], host)?;
     report.sent += 1;
 
@@ -269,7 +310,7 @@ pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, E
         let mut t = Telemetry::new(seq, (k as f64 * dt * 1e6).round() as u64);
         t.counts = sim.counts;
         t.ir = ir;
-        let n = t.encode(&mut out).map_err(Error::Encode)?;
+        let n = t.encode(&mut out).map_err(LinkError::Encode)?;
         socket.send_to(&out[..n], host)?;
         report.sent += 1;
         report.ticks = k;
