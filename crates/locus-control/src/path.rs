@@ -18,27 +18,12 @@
 //! points away from the path. Both outputs are then clamped to `|V| <= V_ref`,
 //! `|W| <= W_ref`.
 
-use core::f64::consts::{FRAC_PI_2, PI, TAU};
+use core::f64::consts::FRAC_PI_2;
 
-/// A pose estimate in the world frame.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Pose {
-    /// Position x (m).
-    pub x: f64,
-    /// Position y (m).
-    pub y: f64,
-    /// Heading (rad), counter-clockwise from the world x axis; any value (it is
-    /// wrapped where needed).
-    pub theta: f64,
-}
-
-impl Pose {
-    /// A pose from its components (metres, metres, radians).
-    #[must_use]
-    pub const fn new(x: f64, y: f64, theta: f64) -> Self {
-        Self { x, y, theta }
-    }
-}
+/// A pose estimate in the world frame (m, m, rad): Locus's one planar pose.
+/// Its heading may take any value (it is wrapped where a difference of
+/// angles is formed).
+pub type Pose = locus_core::Pose<f64>;
 
 /// A point in the world frame (m).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -166,12 +151,7 @@ fn clamp(value: f64, limit: f64) -> f64 {
     }
 }
 
-/// Wraps an angle to `[-pi, pi]` (rad).
-#[must_use]
-pub fn wrap_angle(angle: f64) -> f64 {
-    let r = libm::remainder(angle, TAU);
-    if r > PI { r - TAU } else { r }
-}
+pub use locus_core::wrap_angle;
 
 /// One routine of paper 001, as plain data (its progress lives in [`Routine`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
