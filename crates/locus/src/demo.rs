@@ -5,13 +5,24 @@
 //! over-count the right wheel by a small scale error, so odometry alone turns
 //! and drifts; the two IR sensors on its right see the wall and the EKF
 //! corrects x and theta (a wall cannot tell y).
+//!
+//! The filter is paper 001's localisation loop as every loop of Locus runs
+//! it ([`locus_models::Localiser`]: prediction, association of the IR pair
+//! with a wall of the arena, correction behind the gate, NIS consistency
+//! monitor); the demo feeds it the noisy wheel travels and the readings.
+//! The walls are the square arena's ([`World::square_arena`]): `wall_x+`
+//! spans `-0.85 <= y <= 0.15`, the 1 m of the leg, so a reading taken where
+//! the estimate's sensing ray passes beyond its end finds no wall and is
+//! dropped (unassociated; the estimate runs about 1 % ahead in y, so the
+//! last one or two readings of the leg are).
 
-use anyhow::{Context, Result, ensure};
+use anyhow::{Context, Result, bail, ensure};
 use clap::Args;
 use comfy_table::{Table, presets::UTF8_FULL};
-use locus_core::nalgebra::{Matrix3, Vector2, Vector3};
-use locus_core::{Belief, ChiSquareGate, ConsistencyMonitor, Ekf, MotionModel, wrap_angle};
-use locus_models::{AxisWall, DiffDrive, IrPair, IrPairObservation, WheelTravel};
+use locus_core::nalgebra::{Vector2, Vector3};
+use locus_core::{MotionModel, Update, wrap_angle};
+use locus_models::{IrOutcome, LocaliserConfig, WheelTravel};
+use locus_sim::World;
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rand_distr::{Distribution, Normal};
@@ -22,7 +33,8 @@ pub struct DemoArgs {
     /// Seed of the random numbers (a run is reproducible from its seed).
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Number of 0.1 s steps (the leg is 1 m long at 0.1 m/s: 100 steps).
+    /// Number of 0.1 s steps (the leg is 1 m long at 0.1 m/s: 100 steps;
+    /// readings beyond the end of the wall find no wall).
     #[arg(long, default_value_t = 100)]
     steps: usize,
     /// Standard deviation of each IR reading, m.
@@ -50,21 +62,33 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let ir_noise = Normal::new(0.0, args.ir_sigma).context("IR noise")?;
     let wheel_noise = Normal::new(0.0, 2e-4).context("wheel noise")?;
 
-    let model = DiffDrive::new(WHEELBASE, 1e-6, 4e-4);
-    let pair = IrPair::centred(0.10);
-    let wall = AxisWall::x_plus(LW);
-    let ekf = Ekf::default().with_gate(ChiSquareGate::new(0.999)?);
-
-    let start = Vector3::new(0.85, -0.85, core::f64::consts::FRAC_PI_2);
-    let mut truth = start;
-    let mut ekf_belief = Belief::new(
+    let start = [0.85, -0.85, core::f64::consts::FRAC_PI_2];
+    let mut localiser = LocaliserConfig {
+        wheelbase: WHEELBASE,
+        // The demo predicts from wheel travels (`Localiser::predict`), not
+        // encoder counts: the odometer (paper 001's encoder) goes unused.
+        wheel_radius: 0.028,
+        encoder_lines: 90,
+        encoder_gear: 1.0,
+        counter_bits: 32,
+        ir_spacing: 0.10,
+        association_range: IR_RANGE,
+        q11: 1e-6,
+        q22: 4e-4,
+        r11: args.ir_sigma.powi(2),
+        r22: args.ir_sigma.powi(2),
+        gate_confidence: Some(0.999),
         start,
-        Matrix3::from_diagonal(&Vector3::new(1e-4, 1e-4, 1e-3)),
-    );
+        initial_std: [0.01, 0.01, 1e-3_f64.sqrt()],
+    }
+    .localiser()?;
+    let model = localiser.model;
+    let walls = World::square_arena().walls;
+
+    let start = Vector3::from(start);
+    let mut truth = start;
     let mut odo = start;
-    let (mut applied, mut gated, mut observations) = (0usize, 0usize, 0usize);
-    // NIS over the last 50 corrections against its 95 % chi-square bounds.
-    let mut monitor = ConsistencyMonitor::<50>::new(0.95)?;
+    let (mut applied, mut gated, mut unassociated, mut observations) = (0usize, 0, 0, 0);
     let mut sq = [[0.0f64; 3]; 2]; // squared errors: [ekf, odo][x, y, theta]
 
     for _ in 0..args.steps {
@@ -80,7 +104,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
             d2: true_travel.d2 + wheel_noise.sample(&mut rng),
         };
         odo = model.f(&odo, &measured, &Vector2::zeros());
-        ekf_belief = ekf.predict(&ekf_belief, &model, &measured)?;
+        localiser.predict(&measured)?;
 
         // IR readings from the true pose (sensors on the right, looking right).
         let readings = [0.05, -0.05].map(|along| {
@@ -90,23 +114,18 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         });
         if readings.iter().all(|r| *r > 0.04 && *r < IR_RANGE) {
             observations += 1;
-            let obs = IrPairObservation {
-                pair,
-                wall,
-                ds1: readings[0],
-                ds2: readings[1],
-                r11: args.ir_sigma.powi(2),
-                r22: args.ir_sigma.powi(2),
-            };
-            let c = ekf.correct(&ekf_belief, &obs, &obs.z())?;
-            monitor.push(c.nis, c.dof);
-            if c.applied {
-                applied += 1;
-            } else {
-                gated += 1;
+            // Associated with the wall the estimate's sensing ray hits, then
+            // corrected behind the gate (its NIS goes to the monitor).
+            match localiser.ir(&walls, readings)? {
+                IrOutcome::Unassociated => unassociated += 1,
+                IrOutcome::Associated { update, .. } => match update {
+                    Update::Applied { .. } => applied += 1,
+                    Update::Gated { .. } => gated += 1,
+                    Update::NoMeasurement => bail!("the IR pair predicted no measurement"),
+                },
             }
-            ekf_belief = c.belief;
         }
+        let ekf_belief = localiser.belief();
         for (k, est) in [ekf_belief.x, odo].iter().enumerate() {
             sq[k][0] += (est[0] - truth[0]).powi(2);
             sq[k][1] += (est[1] - truth[1]).powi(2);
@@ -129,7 +148,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         format!("{:.2}", 100.0 * rmse(0, 0)),
         format!("{:.2}", 100.0 * rmse(0, 1)),
         format!("{:.2}", rmse(0, 2).to_degrees()),
-        format!("{:.2}", 100.0 * ekf_belief.p[(0, 0)].sqrt()),
+        format!("{:.2}", 100.0 * localiser.belief().p[(0, 0)].sqrt()),
     ]);
     table.add_row(vec![
         "odometry alone".to_string(),
@@ -138,10 +157,13 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         format!("{:.2}", rmse(1, 2).to_degrees()),
         "-".to_string(),
     ]);
-    let nis = monitor.assess();
+    // NIS over the localiser's window of the last corrections against its
+    // 95 % chi-square bounds.
+    let nis = localiser.filter.monitor().assess();
     crate::output::print_out(&format!(
         "locus demo: paper 001, one leg along wall x+ ({} steps of {DT} s, seed {})\n{table}\n\
-         IR observations: {observations}, applied {applied}, gated out {gated} (chi-square 99.9 %)\n\
+         IR observations: {observations}, applied {applied}, gated out {gated} (chi-square 99.9 %), \
+         unassociated {unassociated}\n\
          NIS consistency (last {} corrections): mean {:.2} (95 % bounds {:.2}..{:.2} for dof {:.0}): {}\n",
         args.steps,
         args.seed,
