@@ -10,6 +10,7 @@
 #![forbid(unsafe_code)]
 
 pub mod closed_loop;
+mod error;
 pub mod firmware_data;
 pub mod guide;
 pub mod hover;
@@ -30,6 +31,7 @@ pub mod world;
 pub use closed_loop::{
     CorrectionDetail, LiveParams, SimStep, SquareConfig, SquareSim, StepRecord, Teleop, run_square,
 };
+pub use error::Error;
 pub use robot::{Command, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, WheelTravel};
 pub use scenario::{Record, Sample, Summary, Tally};
 pub use sensors::{Encoder, IrPairSensor, Laser, SensorError, SharpIr};

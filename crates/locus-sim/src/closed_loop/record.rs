@@ -1,0 +1,159 @@
+//! What one step of the closed loop logs: [`StepRecord`], its CSV row
+//! (`log.csv` of `locus run`) and its evaluation [`Sample`].
+
+use locus_core::nalgebra::{Matrix3, Vector3};
+use locus_core::wrap_angle;
+
+use crate::robot::Pose;
+use crate::scenario::{Record, Sample};
+
+/// What one step of the closed loop produced (SI units, world frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepRecord {
+    /// Step index (0-based).
+    pub step: usize,
+    /// Simulated time at the end of the step (s).
+    pub time: f64,
+    /// True pose.
+    pub truth: Pose,
+    /// EKF estimate `[x, y, theta]` (m, m, rad).
+    pub ekf: [f64; 3],
+    /// EKF covariance of `[x, y, theta]` (m^2, m rad, rad^2), symmetric.
+    pub ekf_cov: [[f64; 3]; 3],
+    /// Odometry-only estimate `[x, y, theta]` (m, m, rad).
+    pub odometry: [f64; 3],
+    /// Wheel travels from the encoders `[d1 (right), d2 (left)]` (m).
+    pub wheel_travel: [f64; 2],
+    /// IR readings `(d_s1, d_s2)` (m) when both were in range.
+    pub ir: Option<(f64, f64)>,
+    /// Innovation `z - h(X-)` `[m, rad]` when a reading was associated with
+    /// a wall.
+    pub innovation: Option<[f64; 2]>,
+    /// NIS of that innovation (2 dof).
+    pub nis: Option<f64>,
+    /// Whether the correction was applied (passed the gate).
+    pub applied: bool,
+    /// Diagonal of `H K` (K the Kalman gain) when a reading was associated:
+    /// the share of the position innovation moved into the measured
+    /// position coordinate and of the heading innovation into the heading
+    /// (0: measurement ignored, 1: taken as is). `[0, 0]` if the gate
+    /// rejected the correction.
+    pub gain: Option<[f64; 2]>,
+    /// NEES of the EKF after the step (3 dof, heading error wrapped).
+    pub nees: f64,
+}
+
+impl StepRecord {
+    /// Column names of [`StepRecord::csv_row`], units in brackets.
+    pub const CSV_COLUMNS: [&'static str; 24] = [
+        "step",
+        "time[s]",
+        "true_x[m]",
+        "true_y[m]",
+        "true_theta[rad]",
+        "ekf_x[m]",
+        "ekf_y[m]",
+        "ekf_theta[rad]",
+        "p_xx[m2]",
+        "p_yy[m2]",
+        "p_thth[rad2]",
+        "p_xy[m2]",
+        "odo_x[m]",
+        "odo_y[m]",
+        "odo_theta[rad]",
+        "ir_s1[m]",
+        "ir_s2[m]",
+        "innov_pos[m]",
+        "innov_theta[rad]",
+        "nis",
+        "applied",
+        "nees",
+        "gain_pos",
+        "gain_theta",
+    ];
+}
+
+impl Record for StepRecord {
+    /// The CSV header line (no newline): [`StepRecord::CSV_COLUMNS`].
+    fn csv_header() -> String {
+        Self::CSV_COLUMNS.join(",")
+    }
+
+    /// The record as one CSV line (no newline); absent values are empty.
+    fn csv_row(&self) -> String {
+        fn opt(v: Option<f64>) -> String {
+            v.map_or_else(String::new, |v| format!("{v:.9}"))
+        }
+        let f = |v: f64| format!("{v:.9}");
+        let (s1, s2) = self.ir.unzip();
+        let fields = [
+            self.step.to_string(),
+            format!("{:.2}", self.time),
+            f(self.truth.x),
+            f(self.truth.y),
+            f(self.truth.theta),
+            f(self.ekf[0]),
+            f(self.ekf[1]),
+            f(self.ekf[2]),
+            format!("{:.6e}", self.ekf_cov[0][0]),
+            format!("{:.6e}", self.ekf_cov[1][1]),
+            format!("{:.6e}", self.ekf_cov[2][2]),
+            format!("{:.6e}", self.ekf_cov[0][1]),
+            f(self.odometry[0]),
+            f(self.odometry[1]),
+            f(self.odometry[2]),
+            opt(s1),
+            opt(s2),
+            opt(self.innovation.map(|i| i[0])),
+            opt(self.innovation.map(|i| i[1])),
+            opt(self.nis),
+            u8::from(self.applied).to_string(),
+            format!("{:.6}", self.nees),
+            opt(self.gain.map(|g| g[0])),
+            opt(self.gain.map(|g| g[1])),
+        ];
+        fields.join(",")
+    }
+
+    fn sample(&self) -> Sample {
+        let t = &self.truth;
+        Sample {
+            step: self.step,
+            time: self.time,
+            truth: [t.x, t.y, 0.0],
+            truth_heading: t.theta,
+            estimate: [self.ekf[0], self.ekf[1], 0.0],
+            estimate_heading: self.ekf[2],
+            heading_error: wrap_angle(t.theta - self.ekf[2]),
+            covariance: self.ekf_cov,
+            var_z: 0.0,
+            odometry: Some((
+                [self.odometry[0], self.odometry[1], 0.0],
+                wrap_angle(t.theta - self.odometry[2]),
+            )),
+            nees: self.nees,
+            nees_dof: 3,
+            correction: self.nis.map(|nis| (nis, 2, self.applied)),
+            measured: self.ir.is_some(),
+        }
+    }
+}
+
+/// NEES `e^T P^-1 e` of `x` against `truth` (heading error wrapped); NaN
+/// if `P` is not positive definite.
+pub(super) fn nees(x: &Vector3<f64>, p: &Matrix3<f64>, truth: &Pose) -> f64 {
+    let e = Vector3::new(
+        truth.x - x[0],
+        truth.y - x[1],
+        wrap_angle(truth.theta - x[2]),
+    );
+    locus_eval::nees(&e, p)
+}
+
+pub(super) fn mat3(p: &Matrix3<f64>) -> [[f64; 3]; 3] {
+    [
+        [p[(0, 0)], p[(0, 1)], p[(0, 2)]],
+        [p[(1, 0)], p[(1, 1)], p[(1, 2)]],
+        [p[(2, 0)], p[(2, 1)], p[(2, 2)]],
+    ]
+}
