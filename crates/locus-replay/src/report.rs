@@ -1,0 +1,67 @@
+//! What a replay did, besides the per-step figures.
+
+use locus_core::Belief;
+use locus_eval::Summary;
+
+/// What a replay did, besides the per-step figures.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Report {
+    /// Errors against the ground truth (over the steps it covers), as for
+    /// `locus run`: `readings` counts the compared sightings,
+    /// `associated` those that reached the filter, `corrections` those
+    /// applied.
+    pub summary: Summary,
+    /// Events replayed (odometry records + landmark sightings).
+    pub steps: usize,
+    /// Events compared with ground truth.
+    pub compared: usize,
+    /// Odometry records.
+    pub odometry: usize,
+    /// Landmark sightings in the log (all of them, compared or not).
+    pub sightings: usize,
+    /// Sightings applied (including after recovery).
+    pub applied: usize,
+    /// Sightings rejected by the gate.
+    pub gated: usize,
+    /// Covariance inflations (recoveries: at each, the sighting was retried).
+    pub inflations: usize,
+    /// Sightings applied only after an inflation.
+    pub recovered: usize,
+    /// Sightings of landmarks not in the map.
+    pub not_in_map: usize,
+    /// Sightings where the model predicts no measurement.
+    pub no_measurement: usize,
+    /// Robot-to-robot sightings left out by the log.
+    pub robot_sightings: usize,
+    /// Sightings of unknown targets left out by the log.
+    pub unknown_sightings: usize,
+    /// Sightings that arrived out of order and were applied at their own
+    /// time by re-running the history.
+    pub late: usize,
+    /// Sightings older than the history (or than the first odometry),
+    /// not applied.
+    pub too_late: usize,
+    /// Negative log-likelihood of the innovations (natural log, without
+    /// the constant `ln 2 pi` per sighting): the sum over the sightings
+    /// that reached the filter of `(ln det S + min(NIS, NIS_CAP)) / 2`, `S`
+    /// and the NIS against the belief before the sighting. The objective
+    /// `locus tune` minimises; the cap keeps gross outliers from dominating.
+    pub innovation_nll: f64,
+    /// The final belief.
+    pub final_belief: Belief<f64, 3>,
+}
+
+impl Report {
+    /// Share of the sightings that reached the filter which the gate
+    /// rejected (0 if none reached it).
+    #[must_use]
+    #[allow(clippy::cast_precision_loss)]
+    pub fn gated_share(&self) -> f64 {
+        let n = self.applied + self.gated;
+        if n == 0 {
+            0.0
+        } else {
+            self.gated as f64 / n as f64
+        }
+    }
+}

@@ -1,0 +1,178 @@
+//! One replayed event as the sink sees it: what it was, what the filter did
+//! with it, the estimate after it, its CSV row and its evaluation sample.
+
+use locus_core::nalgebra::Vector3;
+use locus_core::{Belief, wrap_angle};
+use locus_eval::Sample;
+use locus_logs::mrclam::TruthPose;
+
+use crate::Sighting;
+
+/// What happened to a sighting.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SightingOutcome {
+    /// Corrected the belief (NIS of the applied correction; `recovered`:
+    /// applied only after the covariance was inflated).
+    Applied {
+        /// NIS of the correction (2 dof).
+        nis: f64,
+        /// Whether the covariance was inflated before it was applied.
+        recovered: bool,
+    },
+    /// Rejected by the gate (NIS against the belief it was tried on).
+    Gated {
+        /// NIS (2 dof).
+        nis: f64,
+    },
+    /// The landmark is not in the map.
+    NotInMap,
+    /// The model predicts no measurement (the robot on the landmark).
+    NoMeasurement,
+}
+
+/// The kind of an event.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum EventKind {
+    /// An odometry record (the input from now on, after scaling).
+    Odometry {
+        /// Forward speed as logged, m/s.
+        v: f64,
+        /// Turn rate as logged, rad/s.
+        omega: f64,
+    },
+    /// A landmark sighting.
+    Sighting {
+        /// The sighting.
+        sighting: Sighting,
+        /// What the filter did with it.
+        outcome: SightingOutcome,
+    },
+}
+
+/// One replayed event with the final estimate after it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Step {
+    /// Index in canonical (time) order, from 0.
+    pub index: usize,
+    /// The event's time, s (as in the log).
+    pub time: f64,
+    /// Time since the first odometry record, s.
+    pub elapsed: f64,
+    /// The event.
+    pub kind: EventKind,
+    /// The belief after the event.
+    pub belief: Belief<f64, 3>,
+    /// Dead reckoning (odometry alone) `[x, y, theta]` at this time.
+    pub dead_reckoning: [f64; 3],
+    /// Ground truth interpolated at this time, if covered.
+    pub truth: Option<TruthPose>,
+}
+
+impl Step {
+    /// The CSV header of [`Step::csv_row`] (units in the names).
+    #[must_use]
+    pub fn csv_header() -> &'static str {
+        "index,time_s,elapsed_s,event,landmark,range_m,bearing_rad,nis,applied,\
+         x_m,y_m,theta_rad,var_x_m2,cov_xy_m2,cov_xtheta_mrad,var_y_m2,cov_ytheta_mrad,\
+         var_theta_rad2,odo_x_m,odo_y_m,odo_theta_rad,true_x_m,true_y_m,true_theta_rad"
+    }
+
+    /// The step as one CSV line (empty fields where not applicable).
+    #[must_use]
+    pub fn csv_row(&self) -> String {
+        let (event, lm, r, b, nis, applied) = match self.kind {
+            EventKind::Odometry { .. } => (
+                "odometry",
+                String::new(),
+                String::new(),
+                String::new(),
+                String::new(),
+                String::new(),
+            ),
+            EventKind::Sighting { sighting, outcome } => {
+                let (nis, applied) = match outcome {
+                    SightingOutcome::Applied { nis, recovered } => {
+                        (nis.to_string(), if recovered { "recovered" } else { "1" })
+                    }
+                    SightingOutcome::Gated { nis } => (nis.to_string(), "0"),
+                    SightingOutcome::NotInMap => (String::new(), "not-in-map"),
+                    SightingOutcome::NoMeasurement => (String::new(), "no-measurement"),
+                };
+                (
+                    "sighting",
+                    sighting.landmark.to_string(),
+                    sighting.range.to_string(),
+                    sighting.bearing.to_string(),
+                    nis,
+                    applied.to_string(),
+                )
+            }
+        };
+        let x = &self.belief.x;
+        let p = &self.belief.p;
+        let d = &self.dead_reckoning;
+        let truth = self.truth.map_or_else(
+            || ",,".to_string(),
+            |t| format!("{},{},{}", t.x, t.y, t.theta),
+        );
+        format!(
+            "{},{},{},{event},{lm},{r},{b},{nis},{applied},{},{},{},{},{},{},{},{},{},{},{},{},{truth}",
+            self.index,
+            self.time,
+            self.elapsed,
+            x[0],
+            x[1],
+            x[2],
+            p[(0, 0)],
+            p[(0, 1)],
+            p[(0, 2)],
+            p[(1, 1)],
+            p[(1, 2)],
+            p[(2, 2)],
+            d[0],
+            d[1],
+            d[2]
+        )
+    }
+
+    /// The figures `locus run` summarises and draws, if the step has a
+    /// ground truth to compare with (NEES against it, 3 dof).
+    #[must_use]
+    pub fn sample(&self) -> Option<Sample> {
+        let t = self.truth?;
+        let x = &self.belief.x;
+        let e = Vector3::new(t.x - x[0], t.y - x[1], wrap_angle(t.theta - x[2]));
+        let nees = locus_eval::nees(&e, &self.belief.p);
+        let mut covariance = [[0.0; 3]; 3];
+        for (i, row) in covariance.iter_mut().enumerate() {
+            for (j, c) in row.iter_mut().enumerate() {
+                *c = self.belief.p[(i, j)];
+            }
+        }
+        let d = &self.dead_reckoning;
+        let (measured, correction) = match self.kind {
+            EventKind::Odometry { .. } => (false, None),
+            EventKind::Sighting { outcome, .. } => match outcome {
+                SightingOutcome::Applied { nis, .. } => (true, Some((nis, 2, true))),
+                SightingOutcome::Gated { nis } => (true, Some((nis, 2, false))),
+                SightingOutcome::NotInMap | SightingOutcome::NoMeasurement => (true, None),
+            },
+        };
+        Some(Sample {
+            step: self.index,
+            time: self.elapsed,
+            truth: [t.x, t.y, 0.0],
+            truth_heading: t.theta,
+            estimate: [x[0], x[1], 0.0],
+            estimate_heading: x[2],
+            heading_error: e[2],
+            covariance,
+            var_z: 0.0,
+            odometry: Some(([d[0], d[1], 0.0], wrap_angle(t.theta - d[2]))),
+            nees,
+            nees_dof: 3,
+            correction,
+            measured,
+        })
+    }
+}
