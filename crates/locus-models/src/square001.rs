@@ -142,12 +142,64 @@ pub struct LocaliserConfig<T> {
 }
 
 impl<T: Scalar + Real> LocaliserConfig<T> {
+    /// `Ok(())` if every value is in its domain.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the first bad field.
+    pub fn validate(&self) -> Result<(), Error> {
+        let pos = |v: T| v.is_finite() && v > T::zero();
+        let checks = [
+            (
+                [
+                    self.wheelbase,
+                    self.wheel_radius,
+                    self.encoder_gear,
+                    self.ir_spacing,
+                ]
+                .into_iter()
+                .all(pos)
+                    && self.encoder_lines > 0,
+                "localiser geometry (wheelbase, wheel_radius, encoder_lines, encoder_gear, ir_spacing) must be finite and > 0",
+            ),
+            (
+                (1..=32).contains(&self.counter_bits),
+                "localiser counter_bits must be in 1..=32",
+            ),
+            (
+                [
+                    self.association_range,
+                    self.q11,
+                    self.q22,
+                    self.r11,
+                    self.r22,
+                ]
+                .into_iter()
+                .all(pos),
+                "localiser association_range, q11, q22, r11, r22 must be finite and > 0",
+            ),
+            (
+                self.start.iter().all(|v| v.is_finite()) && self.initial_std.into_iter().all(pos),
+                "localiser start must be finite and initial_std finite and > 0",
+            ),
+            (
+                self.gate_confidence.is_none_or(|c| c > 0.0 && c < 1.0),
+                "localiser gate_confidence must be in (0, 1)",
+            ),
+        ];
+        match checks.into_iter().find(|(ok, _)| !ok) {
+            Some((_, what)) => Err(Error::InvalidParameter(what)),
+            None => Ok(()),
+        }
+    }
+
     /// The localiser of this configuration, at its initial belief
     /// `N(start, diag(initial_std^2))`, Joseph form, with the gate.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] for a gate confidence outside (0, 1).
+    /// [`Error::InvalidParameter`] naming the first bad field
+    /// ([`LocaliserConfig::validate`]).
     pub fn localiser(&self) -> Result<Localiser<T>, Error> {
+        self.validate()?;
         let mut ekf = Ekf::<T>::default();
         if let Some(c) = self.gate_confidence {
             ekf = ekf.with_gate(locus_core::ChiSquareGate::new(c)?);

@@ -105,23 +105,6 @@ impl HostConfig {
                 "localiser.counter_bits must be 32 (the link's counts)",
             ),
             (
-                [l.wheelbase, l.wheel_radius, l.encoder_gear, l.ir_spacing]
-                    .into_iter()
-                    .all(pos)
-                    && l.encoder_lines > 0,
-                "localiser geometry (wheelbase, wheel_radius, encoder_lines, encoder_gear, ir_spacing) must be finite and > 0",
-            ),
-            (
-                [l.association_range, l.q11, l.q22, l.r11, l.r22]
-                    .into_iter()
-                    .all(pos),
-                "localiser association_range, q11, q22, r11, r22 must be finite and > 0",
-            ),
-            (
-                l.start.iter().all(|v| v.is_finite()) && l.initial_std.into_iter().all(pos),
-                "localiser start must be finite and initial_std finite and > 0",
-            ),
-            (
                 [
                     c.v_ref,
                     c.w_ref,
@@ -140,10 +123,13 @@ impl HostConfig {
                 "clock_bucket must be finite and > 0 s",
             ),
         ];
-        match checks.into_iter().find(|(ok, _)| !ok) {
-            Some((_, what)) => Err(Error::Config(what)),
-            None => Ok(()),
+        if let Some((_, what)) = checks.into_iter().find(|(ok, _)| !ok) {
+            return Err(Error::Config(what));
         }
+        l.validate().map_err(|e| match e {
+            locus_core::Error::InvalidParameter(what) => Error::Config(what),
+            _ => Error::Config("invalid localiser configuration"),
+        })
     }
 }
 
