@@ -10,13 +10,13 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow};
 use clap::Subcommand;
-use comfy_table::{Table, presets::UTF8_FULL};
-use indicatif::{ProgressBar, ProgressStyle};
 use locus_analysis::doa::{CellResult, DoaConfig, DoaResult, Shard, Study, merge};
 use plotters::prelude::*;
 
 use crate::font::{self, FAMILY};
+use crate::output::progress_bar;
 use crate::plot::{err, on_backend};
+use crate::table::with_header;
 
 /// Arguments of `locus doa`.
 #[derive(clap::Args, Debug)]
@@ -90,11 +90,10 @@ pub fn run(args: &Args) -> Result<()> {
         study.config().run.steps(),
         study.config().run.dt
     );
-    let bar = ProgressBar::new(cells as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} cells, {elapsed} elapsed, eta {eta}")
-            .map_err(|e| anyhow!("progress bar template: {e}"))?,
-    );
+    let bar = progress_bar(
+        cells as u64,
+        "{pos}/{len} cells, {elapsed} elapsed, eta {eta}",
+    )?;
     let started = Instant::now();
     let pool = {
         let mut b = rayon::ThreadPoolBuilder::new();
@@ -187,13 +186,11 @@ fn report(result: &DoaResult, out: &Path, no_plots: bool) -> Result<()> {
         }
         c
     };
-    let mut table = Table::new();
-    table.load_preset(UTF8_FULL);
     let mut header = vec!["v_g".to_owned()];
     header.extend(cols.iter().map(|&j| format!("M_zeta a={}", alpha[j])));
     header.push("max M_zeta (alpha)".into());
     header.push("settle [s] a=5 / 50 / 100".into());
-    table.set_header(header);
+    let mut table = with_header(header);
     for (i, vg) in v_g.iter().enumerate() {
         let mut row = vec![format!("{vg:.4}")];
         for &j in &cols {

@@ -7,11 +7,12 @@
 
 use anyhow::{Result, anyhow};
 use clap::ValueEnum;
-use comfy_table::{Table, presets::UTF8_FULL};
 use locus_analysis::hw::{self, CoreInputs, CoreRun, HwConfig, Latencies, Schedule};
 use locus_core::nalgebra::{Matrix3, Vector3};
 use locus_core::{Belief, CovarianceUpdate, Ekf, MeasurementModel};
 use locus_models::{LaserMount, LaserWallPaper, WallLine};
+
+use crate::table::with_header;
 
 /// The paper's measured time of the core alone (seed 003, Table 3), s.
 const PAPER_TIME_S: f64 = 2.08e-6;
@@ -54,15 +55,20 @@ pub struct Args {
     pub clock_mhz: f64,
 }
 
-/// One correction of paper 000's laser-to-wall model (n = 3, m = 2) in f32,
-/// the core's input bank, with the software plain-form result.
-fn example() -> Result<(CoreInputs, Belief<f32, 3>)> {
-    let model = LaserWallPaper::new(
+/// Paper 000's laser-to-wall model (n = 3, m = 2) in f32.
+fn model() -> LaserWallPaper<f32> {
+    LaserWallPaper::new(
         LaserMount::<f32>::paper_000(),
         WallLine::paper_000(1.17f32),
         1e-4,
         1e-4,
-    );
+    )
+}
+
+/// One correction of the [`model`], the core's input bank, with the
+/// software plain-form result.
+fn example() -> Result<(CoreInputs, Belief<f32, 3>)> {
+    let model = model();
     let x = Vector3::new(0.02f32, -0.01, 0.03);
     let p = Matrix3::new(
         0.010f32, 0.002, 0.001, 0.002, 0.012, -0.001, 0.001, -0.001, 0.004,
@@ -122,9 +128,7 @@ pub fn run(args: &Args) -> Result<()> {
         latencies.div,
         latencies.transition
     );
-    let mut table = Table::new();
-    table.load_preset(UTF8_FULL);
-    table.set_header(vec![
+    let mut table = with_header([
         "schedule",
         "cycles",
         "time [us]",
@@ -141,14 +145,8 @@ pub fn run(args: &Args) -> Result<()> {
         let r = hw::run(&cfg, schedule, &inputs)?;
         let sw_ref = if schedule == Schedule::Scalar {
             // The sequential software correction for the scalar schedule.
-            let model = LaserWallPaper::new(
-                LaserMount::<f32>::paper_000(),
-                WallLine::paper_000(1.17f32),
-                1e-4,
-                1e-4,
-            );
             Ekf::<f32>::new(CovarianceUpdate::Plain)
-                .correct_sequential(&Belief::new(inputs.x, inputs.p), &model, &inputs.z)?
+                .correct_sequential(&Belief::new(inputs.x, inputs.p), &model(), &inputs.z)?
                 .belief
         } else {
             sw
@@ -182,9 +180,7 @@ pub fn run(args: &Args) -> Result<()> {
     println!("{table}");
 
     let r = hw::run(&cfg, Schedule::Inverse2x2, &inputs)?;
-    let mut states = Table::new();
-    states.load_preset(UTF8_FULL);
-    states.set_header(vec!["state (11-step schedule)", "cycles", "share [%]"]);
+    let mut states = with_header(["state (11-step schedule)", "cycles", "share [%]"]);
     for (s, c) in r.cycles_per_state() {
         states.add_row(vec![
             s.name().to_owned(),
@@ -194,9 +190,7 @@ pub fn run(args: &Args) -> Result<()> {
     }
     println!("{states}");
 
-    let mut steps = Table::new();
-    steps.load_preset(UTF8_FULL);
-    steps.set_header(vec!["step", "cycles"]);
+    let mut steps = with_header(["step", "cycles"]);
     let mut order: Vec<&'static str> = Vec::new();
     for p in &r.trace {
         if !order.contains(&p.step) {
@@ -214,9 +208,7 @@ pub fn run(args: &Args) -> Result<()> {
     }
     println!("{steps}");
 
-    let mut sweep = Table::new();
-    sweep.load_preset(UTF8_FULL);
-    sweep.set_header(vec![
+    let mut sweep = with_header([
         "datapaths",
         "11-step cycles",
         "11-step [us]",

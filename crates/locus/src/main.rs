@@ -18,6 +18,7 @@ mod reproduce;
 mod robot;
 mod run;
 mod serve;
+mod table;
 mod tune;
 
 use std::process::ExitCode;

@@ -78,7 +78,8 @@ struct SummaryKeys {
     mean_nees: f64,
     #[serde(rename = "nees_in_95_interval_share")]
     nees_in_interval: f64,
-    /// Measurements of any kind (the key predates the other scenarios).
+    /// Measurements of any kind (the key is named for the square's IR
+    /// sensors).
     #[serde(rename = "ir_readings")]
     readings: usize,
     associated: usize,

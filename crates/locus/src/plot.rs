@@ -29,6 +29,25 @@ const MAX_POINTS: usize = 2000;
 /// deviations).
 pub const ELLIPSE_SIGMA: f64 = 3.0;
 
+/// The pictures' options of `locus run` and `locus replay`.
+#[derive(clap::Args, Debug)]
+pub struct PictureArgs {
+    /// Do not draw the pictures. By default a single run or a replay also
+    /// writes `map`, `errors` and `covariance` as PNG and SVG into the
+    /// output directory: the map (walls, or landmarks as crosses) with the
+    /// true, estimated and odometry paths and covariance ellipses; x, y,
+    /// heading errors with +-3 sigma bands; the variances over time (log
+    /// scale); a replay with corrections also `nis`.
+    #[arg(long)]
+    pub no_plots: bool,
+    /// Level of the covariance ellipses on the map, in standard deviations
+    /// (positive). The legend gives the probability a 2-D Gaussian falls
+    /// inside, 1 - exp(-k^2/2): 39.3 % at 1 sigma (not 68.3 %), 68.3 % at
+    /// 1.515, 98.9 % at 3.
+    #[arg(long, default_value_t = ELLIPSE_SIGMA)]
+    pub ellipse_sigma: f64,
+}
+
 /// Simulated time between two covariance ellipses on the map (s).
 const ELLIPSE_EVERY: f64 = 10.0;
 

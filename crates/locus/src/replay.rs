@@ -12,8 +12,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::{Args as ClapArgs, Subcommand};
-use comfy_table::{Table, presets::UTF8_FULL};
-use indicatif::{ProgressBar, ProgressStyle};
+use comfy_table::Table;
 use locus_logs::mrclam::Dataset;
 use locus_models::laser_wall::Segment;
 use locus_replay::{Config, Log, Report, replay};
@@ -21,8 +20,10 @@ use locus_sim::scenario::Sample;
 use serde::Serialize;
 
 use crate::metrics::{self, RunMetrics, Settings};
-use crate::output::print_out;
-use crate::run::{Info, files_written, summary_tables};
+use crate::output::{print_out, progress_bar};
+use crate::plot::PictureArgs;
+use crate::run::{Info, files_written};
+use crate::table::with_header;
 
 /// Arguments of `locus replay`.
 #[derive(ClapArgs, Debug)]
@@ -91,12 +92,9 @@ struct Common {
     /// Scale factor on the logged turn rate.
     #[arg(long, default_value_t = 1.0)]
     omega_scale: f64,
-    /// Do not draw the pictures.
-    #[arg(long)]
-    no_plots: bool,
-    /// Level of the covariance ellipses on the map, in standard deviations.
-    #[arg(long, default_value_t = crate::plot::ELLIPSE_SIGMA)]
-    ellipse_sigma: f64,
+    /// Pictures.
+    #[command(flatten)]
+    pictures: PictureArgs,
 }
 
 impl Common {
@@ -174,18 +172,14 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path) -> Result<()> {
         .with_context(|| format!("writing {}", csv_path.display()))?;
 
     let total = (log.odometry.len() + log.sightings.len()) as u64;
-    let bar = ProgressBar::new(total);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} events, {elapsed} elapsed")
-            .context("progress bar template")?,
-    );
+    let bar = progress_bar(total, "{pos}/{len} events, {elapsed} elapsed")?;
     let mut samples: Vec<Sample> = Vec::new();
     let mut io_error: Option<std::io::Error> = None;
     let report = replay(log, cfg, |step| {
         if step.index % 4096 == 0 {
             bar.set_position(step.index as u64);
         }
-        if !common.no_plots
+        if !common.pictures.no_plots
             && let Some(s) = step.sample()
         {
             samples.push(s);
@@ -225,7 +219,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path) -> Result<()> {
         },
     )?;
 
-    let pictures = if common.no_plots || samples.is_empty() {
+    let pictures = if common.pictures.no_plots || samples.is_empty() {
         Vec::new()
     } else {
         let title = format!("locus replay {}", log.name);
@@ -234,7 +228,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path) -> Result<()> {
             &samples,
             (&info.walls, info.map_label),
             &title,
-            common.ellipse_sigma,
+            common.pictures.ellipse_sigma,
         )?;
         if samples.iter().any(|s| s.correction.is_some()) {
             written.extend(crate::plot::write_nis(out, &samples, &title)?);
@@ -249,7 +243,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path) -> Result<()> {
         log.duration(),
         report.compared
     );
-    text.push_str(&summary_tables(&info, &report.summary));
+    text.push_str(&crate::table::summary(&info, &report.summary));
     text.push_str(&format!("{}\n", counts_table(cfg, &report)));
     text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
     print_out(&text)
@@ -257,9 +251,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path) -> Result<()> {
 
 /// The replay's own counts: what happened to the sightings.
 fn counts_table(cfg: &Config, r: &Report) -> Table {
-    let mut t = Table::new();
-    t.load_preset(UTF8_FULL)
-        .set_header(vec!["replay [unit]", "value"]);
+    let mut t = with_header(["replay [unit]", "value"]);
     let gate = cfg
         .gate
         .map_or_else(|| "none".to_string(), |g| format!("{:.1} %", 100.0 * g));

@@ -10,9 +10,11 @@
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use comfy_table::{Table, presets::UTF8_FULL};
-use indicatif::{ProgressBar, ProgressStyle};
 use locus_sim::wall45::{InstantStats, PAPER_TABLE3, Wall45Config, Wall45Noise, table3};
+
+use crate::output::progress_bar;
+use crate::run::seeds;
+use crate::table::with_header;
 
 /// What `locus reproduce` can reproduce.
 pub const TARGETS: [&str; 1] = ["table3"];
@@ -45,6 +47,14 @@ fn deg(x: f64) -> String {
     format!("{:.2}", x.to_degrees())
 }
 
+/// A row of the table: the instant (empty but on an instant's first row),
+/// the source and six cells.
+fn row(instant: String, source: &str, cells: [String; 6]) -> Vec<String> {
+    let mut row = vec![instant, source.to_string()];
+    row.extend(cells);
+    row
+}
+
 /// One model's rows: mean estimate (cm, cm, deg), position RMSE (cm),
 /// heading RMSE (deg), mean NEES.
 fn model_cells(s: &InstantStats) -> [String; 6] {
@@ -70,10 +80,7 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
             TARGETS.join(", ")
         );
     }
-    let end = args
-        .seed
-        .checked_add(args.runs)
-        .context("--seed + --runs overflows u64")?;
+    let seeds = seeds(args.seed, args.runs)?;
     let cfg = Wall45Config {
         noise: if args.ideal {
             Wall45Noise::Ideal
@@ -82,12 +89,11 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
         },
         ..Wall45Config::default()
     };
-    let bar = ProgressBar::new(2 * args.runs);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} elapsed, eta {eta}")
-            .context("progress bar template")?,
-    );
-    let t = table3(&cfg, args.seed..end, &|| bar.inc(1)).context("wall45 Monte Carlo")?;
+    let bar = progress_bar(
+        2 * args.runs,
+        "{pos}/{len} runs, {elapsed} elapsed, eta {eta}",
+    )?;
+    let t = table3(&cfg, seeds.clone(), &|| bar.inc(1)).context("wall45 Monte Carlo")?;
     bar.finish_and_clear();
 
     println!(
@@ -96,17 +102,15 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
         cfg.wall_a,
         if args.ideal { "ideal" } else { "realistic" },
         t.runs,
-        args.seed,
-        end - 1,
+        seeds.start,
+        seeds.end - 1,
         cfg.dt,
         cfg.dwell
     );
     println!(
         "paper: one run, its EKF estimate; Locus: mean estimate, RMSE and mean NEES (3 dof, 3 if consistent) over the runs"
     );
-    let mut table = Table::new();
-    table.load_preset(UTF8_FULL);
-    table.set_header(vec![
+    let mut table = with_header([
         "instant",
         "source",
         "x [cm]",
@@ -119,55 +123,56 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
     for (i, p) in PAPER_TABLE3.iter().enumerate() {
         let real = &t.paper_h[i].truth;
         let f2 = |v: f64| format!("{v:.2}");
-        table.add_row(vec![
+        let blank = String::new;
+        table.add_row(row(
             (i + 1).to_string(),
-            "paper: real".into(),
-            f2(p[0]),
-            f2(p[1]),
-            f2(p[2]),
-            String::new(),
-            String::new(),
-            String::new(),
-        ]);
-        table.add_row(vec![
-            String::new(),
-            "paper: EKF".into(),
-            f2(p[3]),
-            f2(p[4]),
-            f2(p[5]),
-            f2((p[3] - p[0]).hypot(p[4] - p[1])),
-            f2((p[5] - p[2]).abs()),
-            String::new(),
-        ]);
-        table.add_row(vec![
-            String::new(),
-            "Locus: true (mean)".into(),
-            cm(real[0]),
-            cm(real[1]),
-            deg(real[2]),
-            String::new(),
-            String::new(),
-            String::new(),
-        ]);
+            "paper: real",
+            [f2(p[0]), f2(p[1]), f2(p[2]), blank(), blank(), blank()],
+        ));
+        let paper_errors = [(p[3] - p[0]).hypot(p[4] - p[1]), (p[5] - p[2]).abs()];
+        table.add_row(row(
+            blank(),
+            "paper: EKF",
+            [
+                f2(p[3]),
+                f2(p[4]),
+                f2(p[5]),
+                f2(paper_errors[0]),
+                f2(paper_errors[1]),
+                blank(),
+            ],
+        ));
+        table.add_row(row(
+            blank(),
+            "Locus: true (mean)",
+            [
+                cm(real[0]),
+                cm(real[1]),
+                deg(real[2]),
+                blank(),
+                blank(),
+                blank(),
+            ],
+        ));
         for (name, s) in [
             ("Locus: paper H", &t.paper_h[i]),
             ("Locus: exact", &t.exact[i]),
         ] {
-            let mut row = vec![String::new(), name.to_string()];
-            row.extend(model_cells(s));
-            table.add_row(row);
+            table.add_row(row(blank(), name, model_cells(s)));
         }
         let o = &t.exact[i];
-        table.add_row(vec![
-            String::new(),
-            "Locus: odometry".into(),
-            String::new(),
-            String::new(),
-            String::new(),
-            cm(o.odometry_position_rmse),
-            deg(o.odometry_heading_rmse),
-            String::new(),
-        ]);
+        table.add_row(row(
+            blank(),
+            "Locus: odometry",
+            [
+                blank(),
+                blank(),
+                blank(),
+                cm(o.odometry_position_rmse),
+                deg(o.odometry_heading_rmse),
+                blank(),
+            ],
+        ));
     }
     println!("{table}");
     println!(

@@ -14,12 +14,12 @@ use anyhow::{Context, Result, anyhow};
 use argmin::core::{CostFunction, Executor, State};
 use argmin::solver::neldermead::NelderMead;
 use clap::Args as ClapArgs;
-use comfy_table::{Table, presets::UTF8_FULL};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use locus_logs::mrclam::Dataset;
 use locus_replay::{Config, Log, Report, replay};
 
-use crate::output::print_out;
+use crate::output::{print_out, progress_bar};
+use crate::table::with_header;
 
 /// Arguments of `locus tune`.
 #[derive(ClapArgs, Debug)]
@@ -135,11 +135,10 @@ pub fn run(args: &Args) -> Result<()> {
         v[i] += if i < 4 { 0.5 } else { 0.05 };
         simplex.push(v);
     }
-    let bar = ProgressBar::new(args.max_iters * 2 + 7);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos} evaluations, {elapsed} elapsed")
-            .context("progress bar template")?,
-    );
+    let bar = progress_bar(
+        args.max_iters * 2 + 7,
+        "{pos} evaluations, {elapsed} elapsed",
+    )?;
     let solver = NelderMead::new(simplex)
         .with_sd_tolerance(1e-3)
         .map_err(|e| anyhow!("Nelder-Mead: {e}"))?;
@@ -170,10 +169,7 @@ pub fn run(args: &Args) -> Result<()> {
         bar.position(),
         args.held_out
     );
-    let mut values = Table::new();
-    values
-        .load_preset(UTF8_FULL)
-        .set_header(vec!["parameter [unit]", "default", "tuned"]);
+    let mut values = with_header(["parameter [unit]", "default", "tuned"]);
     let rows = [
         ("q_v, forward-speed noise PSD [m^2/s]", start.q_v, tuned.q_v),
         (
@@ -195,8 +191,7 @@ pub fn run(args: &Args) -> Result<()> {
     }
     text.push_str(&format!("{values}\n"));
 
-    let mut table = Table::new();
-    table.load_preset(UTF8_FULL).set_header(vec![
+    let mut table = with_header([
         "robot",
         "role",
         "EKF position RMSE default / tuned [m]",
