@@ -1,8 +1,8 @@
 //! What the teaching UI needs of the closed loop: teleoperation, the live
 //! parameters, and the details of each correction.
 
-use locus_core::nalgebra::{Vector2, Vector3};
-use locus_core::{Belief, MeasurementModel};
+use locus_core::nalgebra::{Matrix2, Vector2, Vector3};
+use locus_core::{Belief, MeasurementModel, Update};
 use locus_models::IrPairObservation;
 
 #[cfg(doc)]
@@ -101,9 +101,10 @@ pub struct CorrectionDetail {
     pub jacobian: [[f64; 3]; 2],
     /// The measurement noise in measurement space `V R V^T` (2x2).
     pub noise: [[f64; 2]; 2],
-    /// The innovation covariance `S = H P- H^T + V R V^T` (2x2).
+    /// The innovation covariance `S = H P- H^T + V R V^T` (2x2), as the
+    /// filter computed it.
     pub s: [[f64; 2]; 2],
-    /// The Kalman gain `K = P- H^T S^-1` (3x2).
+    /// The Kalman gain `K = P- H^T S^-1` (3x2), as the filter computed it.
     pub k: [[f64; 2]; 3],
     /// The innovation `z - h(x-)` (m, rad; heading wrapped).
     pub innovation: [f64; 2],
@@ -135,53 +136,79 @@ pub struct SimStep {
     pub correction: Option<CorrectionDetail>,
 }
 
-/// The [`CorrectionDetail`] of the correction `c` of `prior` by `obs`
-/// with measurement `z`.
-pub(super) fn correction_detail(
-    obs: &IrPairObservation<f64>,
-    z: &Vector2<f64>,
-    before: &Belief<f64, 3>,
-    u: [f64; 2],
-    prior: &Belief<f64, 3>,
-    c: &locus_core::Correction<f64, 3, 2>,
-    gate_threshold: Option<f64>,
-) -> CorrectionDetail {
-    let h = obs.jacobian(&prior.x);
-    let noise = obs.noise(&prior.x);
-    let s = h * prior.p * h.transpose() + noise;
-    let k = s
-        .try_inverse()
-        .map_or_else(locus_core::nalgebra::Matrix3x2::zeros, |si| {
-            prior.p * h.transpose() * si
-        });
-    let hx = obs.h(&prior.x).unwrap_or_else(Vector2::zeros);
-    let m2 =
-        |m: &locus_core::nalgebra::Matrix2<f64>| [[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]];
-    let v3 = |v: &Vector3<f64>| [v[0], v[1], v[2]];
-    CorrectionDetail {
-        x_before_predict: v3(&before.x),
-        p_before_predict: mat3(&before.p),
-        u,
-        x_prior: v3(&prior.x),
-        p_prior: mat3(&prior.p),
-        z: [z[0], z[1]],
-        h: [hx[0], hx[1]],
-        jacobian: [
-            [h[(0, 0)], h[(0, 1)], h[(0, 2)]],
-            [h[(1, 0)], h[(1, 1)], h[(1, 2)]],
-        ],
-        noise: m2(&noise),
-        s: m2(&s),
-        k: [
-            [k[(0, 0)], k[(0, 1)]],
-            [k[(1, 0)], k[(1, 1)]],
-            [k[(2, 0)], k[(2, 1)]],
-        ],
-        innovation: [c.innovation[0], c.innovation[1]],
-        nis: c.nis,
-        gate_threshold,
-        applied: c.applied,
-        x_post: v3(&c.belief.x),
-        p_post: mat3(&c.belief.p),
+/// An IR reading the filter was given: its observation (the associated
+/// wall, readings and `R`), the measurement `z`, the belief it corrected
+/// and what the running filter did with it.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Corrected {
+    pub(super) observation: IrPairObservation<f64>,
+    pub(super) z: Vector2<f64>,
+    pub(super) prior: Belief<f64, 3>,
+    pub(super) update: Update<f64, 3, 2>,
+}
+
+impl Corrected {
+    /// The diagonal of `H G` (`G` the gain of the correction, `H` at the
+    /// prior): the share of the wall-distance innovation moved into the
+    /// estimate's wall distance and of the heading innovation into the
+    /// heading. `[0, 0]` if the gate rejected the reading; `None` if the
+    /// model predicts no measurement.
+    pub(super) fn gain_diagonal(&self) -> Option<[f64; 2]> {
+        match &self.update {
+            Update::Applied { correction, .. } => {
+                let hg = self.observation.jacobian(&self.prior.x) * correction.gain;
+                Some([hg[(0, 0)], hg[(1, 1)]])
+            }
+            Update::Gated { .. } => Some([0.0, 0.0]),
+            Update::NoMeasurement => None,
+        }
+    }
+
+    /// The [`CorrectionDetail`] of this correction, after a prediction from
+    /// `before` with wheel travels `u` (m), behind a gate of NIS threshold
+    /// `gate_threshold`. `None` if the model predicts no measurement.
+    pub(super) fn detail(
+        &self,
+        before: &Belief<f64, 3>,
+        u: [f64; 2],
+        gate_threshold: Option<f64>,
+    ) -> Option<CorrectionDetail> {
+        // The attempt on the prior (its S, gain and NIS) and the belief the
+        // filter kept.
+        let first = self.update.first_attempt()?;
+        let post = self.update.correction()?.belief;
+        let (obs, prior) = (&self.observation, &self.prior);
+        let h = obs.jacobian(&prior.x);
+        let noise = obs.noise(&prior.x);
+        let hx = obs.h(&prior.x).unwrap_or_else(Vector2::zeros);
+        let m2 = |m: &Matrix2<f64>| [[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]];
+        let v3 = |v: &Vector3<f64>| [v[0], v[1], v[2]];
+        let g = &first.gain;
+        Some(CorrectionDetail {
+            x_before_predict: v3(&before.x),
+            p_before_predict: mat3(&before.p),
+            u,
+            x_prior: v3(&prior.x),
+            p_prior: mat3(&prior.p),
+            z: [self.z[0], self.z[1]],
+            h: [hx[0], hx[1]],
+            jacobian: [
+                [h[(0, 0)], h[(0, 1)], h[(0, 2)]],
+                [h[(1, 0)], h[(1, 1)], h[(1, 2)]],
+            ],
+            noise: m2(&noise),
+            s: m2(&first.s),
+            k: [
+                [g[(0, 0)], g[(0, 1)]],
+                [g[(1, 0)], g[(1, 1)]],
+                [g[(2, 0)], g[(2, 1)]],
+            ],
+            innovation: [first.innovation[0], first.innovation[1]],
+            nis: first.nis,
+            gate_threshold,
+            applied: self.update.applied(),
+            x_post: v3(&post.x),
+            p_post: mat3(&post.p),
+        })
     }
 }

@@ -33,11 +33,11 @@ pub struct StepRecord {
     pub nis: Option<f64>,
     /// Whether the correction was applied (passed the gate).
     pub applied: bool,
-    /// Diagonal of `H K` (K the Kalman gain) when a reading was associated:
-    /// the share of the position innovation moved into the measured
-    /// position coordinate and of the heading innovation into the heading
-    /// (0: measurement ignored, 1: taken as is). `[0, 0]` if the gate
-    /// rejected the correction.
+    /// Diagonal of `H G` (`G = P- H^T S^-1` the gain of the correction,
+    /// `H` at the prior) when a reading was associated: the share of the
+    /// position innovation moved into the measured position coordinate and
+    /// of the heading innovation into the heading (0: measurement ignored,
+    /// 1: taken as is). `[0, 0]` if the gate rejected the correction.
     pub gain: Option<[f64; 2]>,
     /// NEES of the EKF after the step (3 dof, heading error wrapped).
     pub nees: f64,
