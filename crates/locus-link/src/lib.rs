@@ -10,7 +10,7 @@ pub mod receiver;
 pub use clock::{ClockEstimator, ClockFit};
 pub use error::Error;
 pub use packet::{
-    COMMAND_LEN, Command, MAGIC, MAX_BEAMS, MAX_PACKET, NO_ACK, Packet, TELEMETRY_MIN_LEN,
+    COMMAND_LEN, CommandPacket, MAGIC, MAX_BEAMS, MAX_PACKET, NO_ACK, Packet, TELEMETRY_MIN_LEN,
     Telemetry, VERSION, decode,
 };
 pub use receiver::{Counters, Receiver, Status};

@@ -23,7 +23,7 @@ pub const COMMAND_LEN: usize = 24;
 /// Largest packet (bytes): telemetry with [`MAX_BEAMS`] beams. A buffer of
 /// this size holds any packet.
 pub const MAX_PACKET: usize = TELEMETRY_MIN_LEN + 4 * MAX_BEAMS;
-/// [`Command::ack`] when the host has applied no telemetry yet.
+/// [`CommandPacket::ack`] when the host has applied no telemetry yet.
 pub const NO_ACK: u32 = u32::MAX;
 
 /// Smallest packet that can be checked: header, sequence and CRC (bytes).
@@ -160,7 +160,7 @@ impl Telemetry {
 
 /// Host to robot: wheel speed commands.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Command {
+pub struct CommandPacket {
     /// Sequence number: 0 for the first command, +1 per command sent,
     /// wrapping at 2^32.
     pub sequence: u32,
@@ -174,7 +174,7 @@ pub struct Command {
     pub left: f32,
 }
 
-impl Command {
+impl CommandPacket {
     /// Writes the packet ([`COMMAND_LEN`] bytes) at the start of `buf`.
     ///
     /// # Errors
@@ -219,7 +219,7 @@ pub enum Packet {
     /// Robot to host.
     Telemetry(Telemetry),
     /// Host to robot.
-    Command(Command),
+    Command(CommandPacket),
 }
 
 /// Decodes one packet. The checks run in this order, and the first that
@@ -258,7 +258,7 @@ pub fn decode(bytes: &[u8]) -> Result<Packet, Error> {
                     len,
                 });
             }
-            let c = Command {
+            let c = CommandPacket {
                 sequence,
                 ack: u32_at(bytes, 8),
                 right: f32_at(bytes, 12),
@@ -362,7 +362,7 @@ mod tests {
 
     #[test]
     fn layout_of_a_command() {
-        let c = Command {
+        let c = CommandPacket {
             sequence: 0x0102_0304,
             ack: 5,
             right: 1.0,

@@ -22,7 +22,7 @@
 //! caller's state; every other class is dropped.
 
 use crate::error::Error;
-use crate::packet::{Command, Telemetry};
+use crate::packet::{CommandPacket, Telemetry};
 
 /// Width of the window of recently received sequence numbers (a bitmap).
 const WINDOW: u32 = 64;
@@ -153,8 +153,8 @@ impl Receiver {
     ///
     /// # Errors
     /// The decode error (already counted as corrupt or malformed).
-    pub fn receive_command(&mut self, bytes: &[u8]) -> Result<(Command, Status), Error> {
-        match Command::decode(bytes) {
+    pub fn receive_command(&mut self, bytes: &[u8]) -> Result<(CommandPacket, Status), Error> {
+        match CommandPacket::decode(bytes) {
             Ok(c) => Ok((c, self.classify(c.sequence))),
             Err(e) => {
                 self.reject(&e);

@@ -3,7 +3,7 @@
 //! error, and every accepted input re-encodes to the same bytes).
 
 use locus_link::{
-    COMMAND_LEN, Command, Error, MAX_BEAMS, MAX_PACKET, Packet, Receiver, Telemetry, decode,
+    COMMAND_LEN, CommandPacket, Error, MAX_BEAMS, MAX_PACKET, Packet, Receiver, Telemetry, decode,
 };
 use proptest::prelude::*;
 
@@ -24,9 +24,9 @@ fn telemetry() -> impl Strategy<Value = Telemetry> {
         })
 }
 
-fn command() -> impl Strategy<Value = Command> {
+fn command() -> impl Strategy<Value = CommandPacket> {
     (any::<u32>(), any::<u32>(), -1e3f32..1e3, -1e3f32..1e3).prop_map(
-        |(sequence, ack, right, left)| Command {
+        |(sequence, ack, right, left)| CommandPacket {
             sequence,
             ack,
             right,
@@ -59,7 +59,7 @@ proptest! {
     fn command_round_trip(c in command()) {
         let mut buf = [0u8; COMMAND_LEN];
         prop_assert_eq!(c.encode(&mut buf), Ok(COMMAND_LEN));
-        prop_assert_eq!(Command::decode(&buf), Ok(c));
+        prop_assert_eq!(CommandPacket::decode(&buf), Ok(c));
     }
 
     /// Any single bit flipped in a valid packet is a CRC error (CRC-32
@@ -173,5 +173,8 @@ fn typed_errors() {
         t.set_beams(&[0.0; 17]),
         Err(Error::TooManyBeams { count: 17 })
     );
-    assert_eq!(Command::decode(&buf[..n]), Err(Error::BadKind { kind: 1 }));
+    assert_eq!(
+        CommandPacket::decode(&buf[..n]),
+        Err(Error::BadKind { kind: 1 })
+    );
 }

@@ -4,7 +4,7 @@
 //! the allocations of the measuring thread only, so the test harness's own
 //! threads cannot disturb the count).
 
-use locus_link::{ClockEstimator, Command, MAX_PACKET, Receiver, Telemetry, decode};
+use locus_link::{ClockEstimator, CommandPacket, MAX_PACKET, Receiver, Telemetry, decode};
 
 #[test]
 fn codec_receiver_and_clock_do_not_allocate() {
@@ -34,7 +34,7 @@ fn codec_receiver_and_clock_do_not_allocate() {
                 applied += 1;
                 clock.push(f64::from(k) * 0.01, f64::from(k) * 0.01 + 0.5);
             }
-            let c = Command {
+            let c = CommandPacket {
                 sequence: k,
                 ack: k,
                 right: 0.1,

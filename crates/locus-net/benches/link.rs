@@ -14,7 +14,7 @@ use std::thread;
 use std::time::Instant;
 
 use criterion::{Criterion, Throughput, criterion_group};
-use locus_link::{Command, MAX_PACKET, Receiver, Telemetry};
+use locus_link::{CommandPacket, MAX_PACKET, Receiver, Telemetry};
 use locus_net::host::run_host;
 use locus_sim::closed_loop::SquareConfig;
 use locus_sim::link_robot::{RobotConfig, host_config, run_robot};
@@ -95,7 +95,7 @@ fn codec(c: &mut Criterion) {
             black_box(rx.receive_telemetry(black_box(&buf[..n])).unwrap())
         });
     });
-    let cmd = Command {
+    let cmd = CommandPacket {
         sequence: 1,
         ack: 2,
         right: 0.1,
@@ -104,7 +104,7 @@ fn codec(c: &mut Criterion) {
     group.bench_function("command encode+decode", |b| {
         b.iter(|| {
             let n = black_box(&cmd).encode(&mut buf).unwrap();
-            black_box(Command::decode(black_box(&buf[..n])).unwrap())
+            black_box(CommandPacket::decode(black_box(&buf[..n])).unwrap())
         });
     });
     group.finish();

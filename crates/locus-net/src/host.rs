@@ -34,7 +34,7 @@ use std::time::Instant;
 
 use locus_control::{Controller, FollowPath, wheel_speeds};
 use locus_link::clock::ClockFit;
-use locus_link::{ClockEstimator, Command, Counters, MAX_PACKET, NO_ACK, Receiver, Status};
+use locus_link::{ClockEstimator, CommandPacket, Counters, MAX_PACKET, NO_ACK, Receiver, Status};
 use locus_models::{Localiser, LocaliserConfig, Segment};
 
 use crate::{Error, at_least_1us, is_timeout};
@@ -207,7 +207,7 @@ pub fn run_host(
     };
     let mut sequence = 0u32;
     let mut send = |socket: &UdpSocket, ack: u32, right: f32, left: f32| -> Result<(), Error> {
-        let c = Command {
+        let c = CommandPacket {
             sequence,
             ack,
             right,

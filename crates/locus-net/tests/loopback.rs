@@ -258,7 +258,7 @@ fn the_watchdog_stops_the_robot_when_commands_stop() {
     let robot = thread::spawn(move || run_robot(&robot_socket, &cfg).unwrap());
     let host = bind();
     let mut buf = [0u8; 64];
-    let c = locus_link::Command {
+    let c = locus_link::CommandPacket {
         sequence: 0,
         ack: locus_link::NO_ACK,
         right: 0.1,

@@ -26,7 +26,7 @@ use core::time::Duration;
 use std::net::UdpSocket;
 use std::time::Instant;
 
-use locus_link::{Command as LinkCommand, MAX_PACKET, Receiver, Status, Telemetry};
+use locus_link::{CommandPacket, MAX_PACKET, Receiver, Status, Telemetry};
 use locus_net::host::HostConfig;
 use locus_net::{Error as LinkError, at_least_1us, is_timeout};
 use locus_odometry::{Wheel as EncoderWheel, wrapping_diff};
@@ -225,7 +225,7 @@ pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, E
 
     // 1. Handshake: the first valid command names the host.
     let deadline = Instant::now() + cfg.handshake;
-    let (mut host, mut command): (SocketAddr, LinkCommand) = loop {
+    let (mut host, mut command): (SocketAddr, CommandPacket) = loop {
         let now = Instant::now();
         if now >= deadline {
             return Err(LinkError::Timeout("waiting for the host's first command").into());
