@@ -132,6 +132,17 @@ struct Run {
 /// 0.02 % every step (printed), ten orders of magnitude above it.
 pub const DET_ROUNDING: f64 = 4.0;
 
+/// Whether `det P` fell from the covariance `before` to `after` (3x3,
+/// m^2, m rad, rad^2) by more than its rounding ([`DET_ROUNDING`]): step
+/// a)'s test, used by `locus guide` and the teaching UI alike.
+#[must_use]
+pub fn det_fell(before: &[[f64; 3]; 3], after: &[[f64; 3]; 3]) -> bool {
+    let det =
+        |p: &[[f64; 3]; 3]| locus_core::nalgebra::Matrix3::from_fn(|i, j| p[i][j]).determinant();
+    let rounding = DET_ROUNDING * f64::EPSILON * abs_permanent(before).max(abs_permanent(after));
+    det(after) < det(before) - rounding
+}
+
 /// `perm(|P|)`: the sum of the absolute values of the six products of the
 /// cofactor expansion of the 3x3 `p` (the scale of its determinant's
 /// rounding error).
@@ -194,16 +205,12 @@ pub fn step_config(step: char, base: &SquareConfig) -> Option<SquareConfig> {
 #[allow(clippy::cast_precision_loss)]
 fn measure(cfg: &SquareConfig, seed: u64) -> Result<Run, Error> {
     let mut traces: Vec<f64> = Vec::new();
-    // (det P, perm(|P|)) per step.
-    let mut dets: Vec<(f64, f64)> = Vec::new();
+    let mut covs: Vec<[[f64; 3]; 3]> = Vec::new();
     let mut last = None;
     let (mut gain_sum, mut gains) = (0.0, 0usize);
     let summary = run_square(cfg, seed, &mut |r: &StepRecord| {
         traces.push(r.ekf_cov[0][0] + r.ekf_cov[1][1]);
-        dets.push((
-            locus_core::nalgebra::Matrix3::from_fn(|i, j| r.ekf_cov[i][j]).determinant(),
-            abs_permanent(&r.ekf_cov),
-        ));
+        covs.push(r.ekf_cov);
         if let Some(g) = r.gain {
             gain_sum += g[0];
             gains += 1;
@@ -218,16 +225,12 @@ fn measure(cfg: &SquareConfig, seed: u64) -> Result<Run, Error> {
         .windows(2)
         .map(|w| (w[0] - w[1]) / w[0])
         .fold(0.0, f64::max);
-    let det_decreases = dets
+    let det_decreases = covs.windows(2).filter(|w| det_fell(&w[0], &w[1])).count();
+    let det =
+        |p: &[[f64; 3]; 3]| locus_core::nalgebra::Matrix3::from_fn(|i, j| p[i][j]).determinant();
+    let det_min_change = covs
         .windows(2)
-        .filter(|w| {
-            let rounding = DET_ROUNDING * f64::EPSILON * w[0].1.max(w[1].1);
-            w[1].0 < w[0].0 - rounding
-        })
-        .count();
-    let det_min_change = dets
-        .windows(2)
-        .map(|w| (w[1].0 - w[0].0) / w[0].0)
+        .map(|w| (det(&w[1]) - det(&w[0])) / det(&w[0]))
         .fold(f64::INFINITY, f64::min);
     Ok(Run {
         summary,
