@@ -10,19 +10,16 @@
 //! it ([`locus_models::Localiser`]: prediction, association of the IR pair
 //! with a wall of the arena, correction behind the gate, NIS consistency
 //! monitor); the demo feeds it the noisy wheel travels and the readings.
-//! The walls are the square arena's ([`World::square_arena`]): `wall_x+`
-//! spans `-0.85 <= y <= 0.15`, the 1 m of the leg, so a reading taken where
-//! the estimate's sensing ray passes beyond its end finds no wall and is
-//! dropped (unassociated; the estimate runs about 1 % ahead in y, so the
-//! last one or two readings of the leg are).
+//! The map is the arena's whole east side, the line `x = 1 m` for
+//! `-1 <= y <= 1` (m), so every reading of the leg (and of a longer run,
+//! `--steps` above 100) has its wall.
 
 use anyhow::{Context, Result, bail, ensure};
 use clap::Args;
 use comfy_table::{Table, presets::UTF8_FULL};
 use locus_core::nalgebra::{Vector2, Vector3};
 use locus_core::{MotionModel, Update, wrap_angle};
-use locus_models::{IrOutcome, LocaliserConfig, WheelTravel};
-use locus_sim::World;
+use locus_models::{IrOutcome, LocaliserConfig, Segment, WheelTravel};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rand_distr::{Distribution, Normal};
@@ -83,7 +80,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     }
     .localiser()?;
     let model = localiser.model;
-    let walls = World::square_arena().walls;
+    let walls = [Segment::new([LW, -LW], [LW, LW])];
 
     let start = Vector3::from(start);
     let mut truth = start;
