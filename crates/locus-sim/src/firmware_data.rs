@@ -1,4 +1,4 @@
-//! The recorded sequence the Cortex-M4F firmware replays (issue 10): the
+//! The recorded sequence the Cortex-M4F firmware replays: the
 //! first steps of a seeded `square` run ([`run_square`], paper 001's closed
 //! loop), written as a Rust source file of constants for
 //! `firmware/locus-fw-app/src/square_data.rs`.

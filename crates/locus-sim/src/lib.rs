@@ -6,7 +6,9 @@
 //! cast on the map. All randomness comes from a caller's seeded `StdRng`, so a
 //! run is reproducible from its seed.
 //!
-//! Scenarios, the closed loop and `locus run` build on this crate (issue 5).
+//! The scenarios of `locus run` (paper 001's square closed loop, wall45,
+//! tricycle-slip, hover), the guide and the simulated robot of the link
+//! build on it.
 #![forbid(unsafe_code)]
 
 pub mod closed_loop;

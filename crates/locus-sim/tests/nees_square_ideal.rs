@@ -1,4 +1,4 @@
-//! NEES consistency of the EKF on `square-ideal` (issue 5): with the
+//! NEES consistency of the EKF on `square-ideal`: with the
 //! simulated noise exactly as the filter's `Q` and `R` assume, the N-run
 //! average NEES of each time step lies inside the two-sided 95 % interval of
 //! `chi-square(3N) / N` for at least 90 % of the steps.

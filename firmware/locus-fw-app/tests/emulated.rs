@@ -1,4 +1,4 @@
-//! The Cortex-M4F firmware under emulation (issue 10).
+//! The Cortex-M4F firmware under emulation.
 //!
 //! Builds `locus-fw` for `thumbv7em-none-eabihf` (release), runs it under
 //! `qemu-system-arm -machine mps2-an386 -cpu cortex-m4` with semihosting and

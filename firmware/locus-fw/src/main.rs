@@ -1,4 +1,4 @@
-//! Locus on a Cortex-M4F (issue 10): runs [`locus_fw_app`]'s recorded
+//! Locus on a Cortex-M4F: runs [`locus_fw_app`]'s recorded
 //! `square` sequence (quadrature decoding, the paper-001 EKF with IR wall
 //! corrections, CORDIC odometry, all `f32`) and prints, over semihosting, the
 //! final belief and odometry pose (as `f32` bit patterns and decimals), the
