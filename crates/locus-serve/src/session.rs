@@ -5,10 +5,9 @@
 use core::time::Duration;
 use std::time::Instant;
 
+use locus_eval::Record;
 use locus_sim::closed_loop::NoiseModel;
-use locus_sim::{
-    CorrectionDetail, LiveParams, Record, SquareConfig, SquareSim, StepRecord, Teleop,
-};
+use locus_sim::{CorrectionDetail, LiveParams, SquareConfig, SquareSim, StepRecord, Teleop};
 use serde_json::{Map, Value};
 
 use crate::params::{self, Invalid};

@@ -302,7 +302,11 @@ fn presets_load_the_guide_steps() {
     };
     let f = figure.expect("the preset's live figure");
     assert_eq!(f.step, 'e');
-    assert!(f.measured.contains("mean wall-coordinate gain"), "{}", f.measured);
+    assert!(
+        f.measured.contains("mean wall-coordinate gain"),
+        "{}",
+        f.measured
+    );
     // The ideal scenario has no guide.
     s.handle_text(r#"{"type":"scenario","name":"square-ideal"}"#, now);
     let out = s.handle_text(r#"{"type":"preset","step":"a"}"#, now);

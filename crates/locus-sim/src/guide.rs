@@ -49,7 +49,7 @@ use core::fmt::Write as _;
 use locus_core::chi2;
 
 use crate::closed_loop::{Error, NoiseModel, SquareConfig, StepRecord, run_square};
-use crate::scenario::Summary;
+use locus_eval::Summary;
 
 /// IR noise standard deviation injected in steps c to f (m).
 pub const IR_NOISE: f64 = 0.02;

@@ -50,7 +50,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::closed_loop::Error;
 use crate::noise::gauss;
-use crate::scenario::{Record, Sample, Summary, Tally};
+use locus_eval::{Record, Sample, Summary, Tally};
 
 /// The estimator of the `hover` scenario.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize, Serialize)]

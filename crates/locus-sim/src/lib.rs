@@ -19,11 +19,6 @@ pub mod hover;
 pub mod link_robot;
 mod noise;
 pub mod robot;
-/// The evaluation types every scenario reports through (defined in
-/// `locus-eval`).
-pub mod scenario {
-    pub use locus_eval::{Record, Sample, Summary, Tally};
-}
 pub mod scenario_file;
 pub mod sensors;
 pub mod tricycle_slip;
@@ -35,6 +30,5 @@ pub use closed_loop::{
 };
 pub use error::Error;
 pub use robot::{Command, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, WheelTravel};
-pub use scenario::{Record, Sample, Summary, Tally};
 pub use sensors::{Encoder, IrPairSensor, Laser, SensorError, SharpIr};
 pub use world::{Hit, World};

@@ -46,7 +46,7 @@ use serde::{Deserialize, Serialize};
 use crate::closed_loop::Error;
 use crate::noise::gauss;
 use crate::robot::{Command, Kinematics, Pose, Robot, Slip, SlipSchedule, Wheel};
-use crate::scenario::{Record, Sample, Summary, Tally};
+use locus_eval::{Record, Sample, Summary, Tally};
 use crate::sensors::{Encoder, Laser};
 use crate::world::World;
 

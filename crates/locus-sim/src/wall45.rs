@@ -67,9 +67,9 @@ use serde::{Deserialize, Serialize};
 use crate::closed_loop::Error;
 use crate::noise::gauss;
 use crate::robot::{Command, Kinematics, Pose, Robot};
-use crate::scenario::{Record, Sample, Summary, Tally};
 use crate::sensors::Laser;
 use crate::world::World;
+use locus_eval::{Record, Sample, Summary, Tally};
 
 /// Table III of seed 000 (spec section 2), as the paper gives it: for each
 /// instant 1..=6, `[real x (cm), real y (cm), real theta (deg), EKF x (cm),

@@ -13,8 +13,8 @@
 //! `cargo test -p locus-sim --test hover -- --nocapture` prints the figures.
 
 use locus_core::chi2;
+use locus_eval::{Record, Sample};
 use locus_sim::hover::{HoverConfig, HoverEstimator, HoverRecord, run_hover};
-use locus_sim::scenario::{Record, Sample};
 
 /// Monte Carlo runs (seeds `0..RUNS`).
 const RUNS: u64 = 100;

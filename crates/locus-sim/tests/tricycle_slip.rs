@@ -5,7 +5,7 @@
 //! `cargo test -p locus-sim --test tricycle_slip -- --nocapture` prints the
 //! figures.
 
-use locus_sim::scenario::Record;
+use locus_eval::Record;
 use locus_sim::tricycle_slip::{
     SlipRejection, TricycleSlipConfig, TricycleSlipRecord, run_tricycle_slip,
 };

@@ -4,7 +4,7 @@
 //! `cargo test -p locus-sim --test wall45 -- --nocapture` prints the figures.
 
 use locus_core::chi2;
-use locus_sim::scenario::{Record, Sample};
+use locus_eval::{Record, Sample};
 use locus_sim::wall45::{
     INSTANTS, LaserModel, PAPER_TABLE3, Wall45Config, Wall45Record, run_wall45, table3,
 };

@@ -12,7 +12,7 @@ use std::io;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use locus_sim::scenario::Summary;
+use locus_eval::Summary;
 use serde::Serialize;
 
 use crate::run::Info;

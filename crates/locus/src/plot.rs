@@ -8,8 +8,8 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow};
+use locus_eval::Sample;
 use locus_models::laser_wall::Segment;
-use locus_sim::scenario::Sample;
 use plotters::coord::{CoordTranslate, Shift};
 use plotters::prelude::*;
 

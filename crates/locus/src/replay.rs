@@ -13,10 +13,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::{Args as ClapArgs, Subcommand};
 use comfy_table::Table;
+use locus_eval::Sample;
 use locus_logs::mrclam::Dataset;
 use locus_models::laser_wall::Segment;
 use locus_replay::{Config, Log, Report, replay};
-use locus_sim::scenario::Sample;
 use serde::Serialize;
 
 use crate::metrics::{self, RunMetrics, Settings};

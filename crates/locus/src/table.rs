@@ -4,7 +4,7 @@
 //! `locus replay` ([`summary`]).
 
 use comfy_table::{Row, Table, presets::UTF8_FULL};
-use locus_sim::scenario::Summary;
+use locus_eval::Summary;
 
 use crate::run::Info;
 

@@ -5,7 +5,7 @@ use locus_core::nalgebra::{Matrix3, Vector3};
 use locus_core::wrap_angle;
 
 use crate::robot::Pose;
-use crate::scenario::{Record, Sample};
+use locus_eval::{Record, Sample};
 
 /// What one step of the closed loop produced (SI units, world frame).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -10,9 +10,9 @@ use super::plant::{IrReadings, Plant};
 use super::record::{mat3, nees};
 use super::{Error, LiveParams, NoiseModel, SimStep, SquareConfig, StepRecord, Teleop};
 use crate::robot::Pose;
-use crate::scenario::{Record, Summary, Tally};
 use crate::sensors::IrPairSensor;
 use crate::world::World;
+use locus_eval::{Record, Summary, Tally};
 
 /// Width of the simulated decoder's wrapping counters (bits), as in
 /// [`locus_odometry::Counter::paper`].

@@ -8,7 +8,7 @@ use std::fs;
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use locus_sim::scenario::{Record, Summary};
+use locus_eval::{Record, Summary};
 use rayon::prelude::*;
 use serde::Serialize;
 
