@@ -9,8 +9,9 @@ use core::hint::black_box;
 use core::time::Duration;
 
 use criterion::Criterion;
+use locus_core::Pose;
 use locus_odometry::cordic::{Cordic, Libm};
-use locus_odometry::redundant::{Integration, Odometry, Pose, Reading, Selection, Tricycle};
+use locus_odometry::redundant::{Integration, Odometry, Reading, Selection, Tricycle};
 
 /// Paper 004: a sequential core, one iteration per clock, 16 iterations at
 /// 50 MHz.

@@ -16,8 +16,8 @@ pub use counter::{Counter, wrapping_diff};
 pub use error::Error;
 pub use quadrature::{Direction, QuadratureDecoder, Transition};
 pub use redundant::{
-    Increment, Integration, Motion, Odometry, Pose, Reading, Selection, Steering, Tricycle, select,
+    Increment, Integration, Motion, Odometry, Reading, Selection, Steering, Tricycle, select,
 };
 pub use source::{CountSource, EncoderSource};
 pub use speed::{Estimate, Mode, SpeedConfig, SpeedEstimator};
-pub use wheel::{Real, Wheel, wrap_angle};
+pub use wheel::{Real, Wheel};

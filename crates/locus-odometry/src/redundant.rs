@@ -4,7 +4,8 @@
 //! The robot: a front wheel that drives and steers (steering angle `phi`
 //! from its own encoder, limited to +-40 deg), two passive rear wheels with
 //! encoders, rear track `D`, wheelbase `L`. The pose `(x, y, theta)`
-//! (m, m, rad) is the **rear-axle midpoint** in the world frame, heading
+//! (m, m, rad; Locus's one [`Pose`], heading in
+//! (-pi, pi]) is the **rear-axle midpoint** in the world frame, heading
 //! from the world x axis, counter-clockwise; the same conventions as
 //! `locus_models::tricycle`, whose `TricycleRear`/`TricycleFront`
 //! `increments` these formulas are cross-checked against
@@ -52,8 +53,9 @@
 //! both effects. Ties go to the rear (the paper's more reliable source).
 //!
 //! ```
+//! use locus_core::Pose;
 //! use locus_odometry::cordic::Libm;
-//! use locus_odometry::redundant::{Integration, Odometry, Pose, Reading, Selection, Tricycle};
+//! use locus_odometry::redundant::{Integration, Odometry, Reading, Selection, Tricycle};
 //!
 //! let mut odo = Odometry::new(
 //!     Tricycle::<f64>::assumed(),
@@ -68,9 +70,11 @@
 //! assert!((odo.pose().x - 0.00999).abs() < 1e-4);
 //! ```
 
+use locus_core::{Pose, cast, wrap_angle};
+
 use crate::cordic::SinCos;
 use crate::error::Error;
-use crate::wheel::{Real, Wheel, wrap_angle};
+use crate::wheel::{Real, Wheel};
 
 /// The steering encoder: counts from straight ahead to the steering angle.
 ///
@@ -95,20 +99,20 @@ impl<T: Real> Steering<T> {
         Self {
             lines: 500,
             gear: T::ONE,
-            limit: T::from_f64(40f64.to_radians()),
+            limit: cast(40f64.to_radians()),
         }
     }
 
     /// Steering angle per count, rad: `2 pi / (4 lines G)`.
     #[inline]
     pub fn quantum(&self) -> T {
-        T::TWO_PI / (T::from_u32(4) * T::from_u32(self.lines) * self.gear)
+        T::TWO_PI / (T::from_uint(4) * T::from_uint(self.lines) * self.gear)
     }
 
     /// The angle of a count `n_S` from straight ahead, rad, **not** limited.
     #[inline]
     pub fn raw_angle(&self, n_s: i32) -> T {
-        T::from_i32(n_s) * self.quantum()
+        T::from_int(n_s) * self.quantum()
     }
 
     /// The angle of a count, clamped to `[-limit, limit]`, rad. This is
@@ -176,9 +180,9 @@ impl<T: Real> Tricycle<T> {
     pub fn assumed() -> Self {
         Self {
             rear: Wheel::assumed(),
-            front: Wheel::new(500, T::ONE, T::from_f64(0.06)),
-            track: T::from_f64(0.40),
-            wheelbase: T::from_f64(0.45),
+            front: Wheel::new(500, T::ONE, cast(0.06)),
+            track: cast(0.40),
+            wheelbase: cast(0.45),
             steering: Steering::assumed(),
         }
     }
@@ -214,7 +218,7 @@ impl<T: Real> Tricycle<T> {
     pub fn rear_motion(&self, n_l: i32, n_r: i32) -> Motion<T> {
         // One count rolls q = dP = pi R / (2 lines G) = 2 pi R / N.
         let q = self.rear.quantum();
-        let (l, r) = (T::from_i32(n_l), T::from_i32(n_r));
+        let (l, r) = (T::from_int(n_l), T::from_int(n_r));
         Motion {
             ds: T::HALF * q * (r + l),
             dtheta: q * (r - l) / self.track,
@@ -306,6 +310,17 @@ impl<T: Real> Increment<T> {
     pub fn path_length_sq(&self) -> T {
         self.dx * self.dx + self.dy * self.dy
     }
+
+    /// The pose after this increment:
+    /// `(x + dx, y + dy, wrap(theta + dtheta))`.
+    #[inline]
+    pub fn apply(&self, pose: &Pose<T>) -> Pose<T> {
+        Pose {
+            x: pose.x + self.dx,
+            y: pose.y + self.dy,
+            theta: wrap_angle(pose.theta + self.dtheta),
+        }
+    }
 }
 
 /// How the increment of a step is chosen from the rear and front sources.
@@ -346,40 +361,6 @@ pub fn select<T: Real>(
             } else {
                 *rear
             }
-        }
-    }
-}
-
-/// A planar pose: rear-axle midpoint `(x, y)` (m, world frame) and heading
-/// `theta` (rad, in (-pi, pi]).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Pose<T> {
-    /// x, m.
-    pub x: T,
-    /// y, m.
-    pub y: T,
-    /// Heading, rad, (-pi, pi].
-    pub theta: T,
-}
-
-impl<T: Real> Pose<T> {
-    /// A pose (m, m, rad; the heading is wrapped to (-pi, pi]).
-    #[inline]
-    pub fn new(x: T, y: T, theta: T) -> Self {
-        Self {
-            x,
-            y,
-            theta: wrap_angle(theta),
-        }
-    }
-
-    /// The pose after an increment: `(x + dx, y + dy, wrap(theta + dtheta))`.
-    #[inline]
-    pub fn advance(&self, inc: &Increment<T>) -> Self {
-        Self {
-            x: self.x + inc.dx,
-            y: self.y + inc.dy,
-            theta: wrap_angle(self.theta + inc.dtheta),
         }
     }
 }
@@ -480,7 +461,7 @@ impl<T: Real, S: SinCos<T>> Odometry<T, S> {
                 select(self.selection, &rear, &front)
             }
         };
-        self.pose = self.pose.advance(&inc);
+        self.pose = inc.apply(&self.pose);
         inc
     }
 }
@@ -547,11 +528,12 @@ mod tests {
 
     #[test]
     fn pose_wraps_and_f32_works() {
-        let p = Pose::new(0.0f32, 0.0, 3.1).advance(&Increment {
+        let p = Increment {
             dx: 0.0,
             dy: 0.0,
             dtheta: 0.1,
-        });
+        }
+        .apply(&Pose::new(0.0f32, 0.0, 3.1));
         assert!(p.theta < 0.0 && (p.theta + 2.0 * core::f32::consts::PI - 3.2).abs() < 1e-5);
         let mut odo = Odometry::new(
             Tricycle::<f32>::assumed(),

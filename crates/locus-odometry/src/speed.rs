@@ -87,6 +87,8 @@
 //! assert!((e.resolution - k / 10_000.0).abs() < 1e-7);
 //! ```
 
+use locus_core::cast;
+
 use crate::error::Error;
 use crate::quadrature::{Direction, Transition};
 use crate::wheel::{Real, Wheel};
@@ -151,11 +153,11 @@ impl<T: Real> SpeedConfig<T> {
         Self {
             wheel: Wheel::assumed(),
             clock_hz: 1_000_000,
-            window: T::from_f64(0.01),
+            window: cast(0.01),
             to_period_below: 8,
             to_pulse_above: 12,
             period_edges: 4,
-            standstill_timeout: T::from_f64(0.1),
+            standstill_timeout: cast(0.1),
             initial_mode: Mode::Period,
             edge_spread: T::ZERO,
         }
@@ -164,7 +166,7 @@ impl<T: Real> SpeedConfig<T> {
     /// `K = pi R f / (2 N G)`, m/s: the speed of one count per tick (the
     /// wheel's distance per count times `f`).
     pub fn speed_scale(&self) -> T {
-        self.wheel.quantum() * T::from_u32(self.clock_hz)
+        self.wheel.quantum() * T::from_uint(self.clock_hz)
     }
 
     /// The window `T f` in ticks, rounded.
@@ -430,9 +432,9 @@ impl<T: Real> SpeedEstimator<T> {
     }
 
     fn pulse_estimate(&self, count: i32, now: u32) -> Estimate<T> {
-        let w = T::from_u32(now.wrapping_sub(self.window_start));
+        let w = T::from_uint(now.wrapping_sub(self.window_start));
         Estimate {
-            speed: self.k * T::from_i32(count) / w,
+            speed: self.k * T::from_int(count) / w,
             mode: Mode::Pulse,
             resolution: self.k / w * (T::ONE + self.config.edge_spread),
             from_tick: self.window_start,
@@ -453,7 +455,7 @@ impl<T: Real> SpeedEstimator<T> {
             return Some(Estimate {
                 speed: T::ZERO,
                 mode: Mode::Period,
-                resolution: self.k / T::from_u32(quiet) * (T::ONE + self.config.edge_spread),
+                resolution: self.k / T::from_uint(quiet) * (T::ONE + self.config.edge_spread),
                 from_tick: self.last_activity,
                 to_tick: now,
             });
@@ -467,7 +469,7 @@ impl<T: Real> SpeedEstimator<T> {
         if c < 2 {
             return None;
         }
-        let speed = self.k * T::from_u32(self.config.period_edges) / T::from_u32(c);
+        let speed = self.k * T::from_uint(self.config.period_edges) / T::from_uint(c);
         Some(Estimate {
             speed: if self.direction == Some(Direction::Reverse) {
                 -speed
@@ -475,7 +477,7 @@ impl<T: Real> SpeedEstimator<T> {
                 speed
             },
             mode: Mode::Period,
-            resolution: speed / T::from_u32(c - 1),
+            resolution: speed / T::from_uint(c - 1),
             from_tick: oldest,
             to_tick: newest,
         })

@@ -29,8 +29,7 @@
 //! assert!((w.distance(2000) - 2.0 * core::f64::consts::PI * 0.05).abs() < 1e-15);
 //! ```
 
-use core::fmt::Debug;
-use core::ops::{Add, Div, Mul, Neg, Sub};
+use locus_core::{Scalar, cast};
 
 mod sealed {
     pub trait Sealed {}
@@ -39,21 +38,13 @@ mod sealed {
 }
 
 /// The floating-point types the odometry arithmetic runs in: `f32` and
-/// `f64` (sealed). Only the few operations the odometry needs; the
-/// transcendental ones go through `libm`, so everything works under
-/// `no_std`. Sines and cosines are not here: they come from a
-/// [`SinCos`](crate::cordic::SinCos) source (libm or CORDIC).
-pub trait Real:
-    Copy
-    + Debug
-    + PartialOrd
-    + Add<Output = Self>
-    + Sub<Output = Self>
-    + Mul<Output = Self>
-    + Div<Output = Self>
-    + Neg<Output = Self>
-    + sealed::Sealed
-{
+/// `f64` (sealed). Locus's one scalar, [`locus_core::Scalar`] (nalgebra's
+/// `RealField`: `abs`, `floor`, `is_finite`, ... and the arithmetic, all
+/// `no_std` through `libm`), plus the constants and the integer
+/// conversions the odometry needs. Sines and cosines are not used from
+/// here: they come from a [`SinCos`](crate::cordic::SinCos) source (libm or
+/// CORDIC). An `f64` constant becomes a `T` by [`locus_core::cast`].
+pub trait Real: Scalar + sealed::Sealed {
     /// 0.
     const ZERO: Self;
     /// 1.
@@ -65,21 +56,13 @@ pub trait Real:
     /// 2 pi.
     const TWO_PI: Self;
 
-    /// From an `f64` constant (rounded to nearest for `f32`).
-    fn from_f64(v: f64) -> Self;
-    /// From an integer count (exact for `f64`; for `f32`, exact up to
-    /// `2^24` in magnitude).
-    fn from_i32(v: i32) -> Self;
+    /// From a signed integer (a count): exact for `f64`; for `f32`, exact
+    /// up to `2^24` in magnitude (rounded to nearest beyond).
+    fn from_int(v: i32) -> Self;
     /// From an unsigned integer (exact for `f64`; `f32` up to `2^24`).
-    fn from_u32(v: u32) -> Self;
+    fn from_uint(v: u32) -> Self;
     /// To `f64` (exact).
     fn to_f64(self) -> f64;
-    /// `|self|`.
-    fn abs(self) -> Self;
-    /// Largest integer value `<= self`.
-    fn floor(self) -> Self;
-    /// Neither infinite nor NaN.
-    fn is_finite(self) -> bool;
 }
 
 impl Real for f32 {
@@ -90,32 +73,16 @@ impl Real for f32 {
     const TWO_PI: Self = core::f32::consts::TAU;
 
     #[inline]
-    fn from_f64(v: f64) -> Self {
+    fn from_int(v: i32) -> Self {
         v as f32
     }
     #[inline]
-    fn from_i32(v: i32) -> Self {
-        v as f32
-    }
-    #[inline]
-    fn from_u32(v: u32) -> Self {
+    fn from_uint(v: u32) -> Self {
         v as f32
     }
     #[inline]
     fn to_f64(self) -> f64 {
         f64::from(self)
-    }
-    #[inline]
-    fn abs(self) -> Self {
-        libm::fabsf(self)
-    }
-    #[inline]
-    fn floor(self) -> Self {
-        libm::floorf(self)
-    }
-    #[inline]
-    fn is_finite(self) -> bool {
-        f32::is_finite(self)
     }
 }
 
@@ -127,47 +94,17 @@ impl Real for f64 {
     const TWO_PI: Self = core::f64::consts::TAU;
 
     #[inline]
-    fn from_f64(v: f64) -> Self {
-        v
-    }
-    #[inline]
-    fn from_i32(v: i32) -> Self {
+    fn from_int(v: i32) -> Self {
         f64::from(v)
     }
     #[inline]
-    fn from_u32(v: u32) -> Self {
+    fn from_uint(v: u32) -> Self {
         f64::from(v)
     }
     #[inline]
     fn to_f64(self) -> f64 {
         self
     }
-    #[inline]
-    fn abs(self) -> Self {
-        libm::fabs(self)
-    }
-    #[inline]
-    fn floor(self) -> Self {
-        libm::floor(self)
-    }
-    #[inline]
-    fn is_finite(self) -> bool {
-        f64::is_finite(self)
-    }
-}
-
-/// Wraps an angle (rad) into (-pi, pi], as `locus_core::wrap_angle` does.
-#[inline]
-pub fn wrap_angle<T: Real>(a: T) -> T {
-    if a > -T::PI && a <= T::PI {
-        return a;
-    }
-    let mut r = a - T::TWO_PI * ((a + T::PI) / T::TWO_PI).floor();
-    // r is now in [-pi, pi) up to rounding; move -pi (and below) up.
-    if r <= -T::PI {
-        r = r + T::TWO_PI;
-    }
-    r
 }
 
 /// An encoder on a wheel: lines `N`, encoder-shaft revolutions per wheel
@@ -204,7 +141,7 @@ impl<T: Real> Wheel<T> {
     /// (2000 counts per revolution, 0.157 mm per count).
     #[inline]
     pub fn assumed() -> Self {
-        Self::new(500, T::ONE, T::from_f64(0.05))
+        Self::new(500, T::ONE, cast(0.05))
     }
 
     /// `Ok(())` if `lines > 0` and `gear`, `radius` are finite and `> 0`;
@@ -228,21 +165,21 @@ impl<T: Real> Wheel<T> {
     /// This is the tricycle formulas' `N`.
     #[inline]
     pub fn counts_per_rev(&self) -> T {
-        T::from_u32(4) * T::from_u32(self.lines) * self.gear
+        T::from_uint(4) * T::from_uint(self.lines) * self.gear
     }
 
     /// The quantisation step `dP = pi R / (2 N G)`: distance rolled per
     /// count, m. The position error of a reading is within one step.
     #[inline]
     pub fn quantum(&self) -> T {
-        T::PI * self.radius / (T::from_u32(2) * T::from_u32(self.lines) * self.gear)
+        T::PI * self.radius / (T::from_uint(2) * T::from_uint(self.lines) * self.gear)
     }
 
     /// Distance rolled for `counts` counts, `P = pi C R / (2 N G)`, m
     /// (signed: negative counts are backwards).
     #[inline]
     pub fn distance(&self, counts: i32) -> T {
-        T::from_i32(counts) * self.quantum()
+        T::from_int(counts) * self.quantum()
     }
 
     /// The (fractional) number of counts for a distance rolled (m), the
@@ -280,20 +217,5 @@ mod tests {
         assert!(Wheel::new(500, 0.0, 0.05).validate().is_err());
         assert!(Wheel::new(500, 1.0, f64::NAN).validate().is_err());
         assert!(Wheel::new(500, 1.0, -0.05).validate().is_err());
-    }
-
-    #[test]
-    fn wrap() {
-        assert_eq!(wrap_angle(PI), PI);
-        assert_eq!(wrap_angle(-PI), PI);
-        assert_eq!(wrap_angle(3.0 * PI), PI);
-        assert!((wrap_angle(2.0 * PI + 0.1) - 0.1).abs() < 1e-15);
-        assert!((wrap_angle(-2.0 * PI - 0.1) + 0.1).abs() < 1e-15);
-        assert_eq!(wrap_angle(0.25f32), 0.25f32);
-        for k in -50..=50 {
-            let a = f64::from(k) * 0.9;
-            let w = wrap_angle(a);
-            assert!(w > -PI && w <= PI);
-        }
     }
 }

@@ -25,12 +25,10 @@
 
 use core::f64::consts::{FRAC_PI_2, PI};
 
+use locus_core::{Pose, wrap_angle};
 use locus_models::{FrontReading, RearCounts, TricycleFront, TricycleRear};
 use locus_odometry::cordic::{Cordic, Libm, SinCos};
-use locus_odometry::redundant::{
-    Integration, Odometry, Pose, Reading, Selection, Tricycle, select,
-};
-use locus_odometry::wheel::wrap_angle;
+use locus_odometry::redundant::{Integration, Odometry, Reading, Selection, Tricycle, select};
 use proptest::prelude::*;
 
 /// Rear-axle travel per odometry step, m (1 m/s at 100 Hz).

@@ -21,6 +21,7 @@
 mod common;
 
 use common::{EncoderModel, Profile, Waveform, accelerating, constant, jittered, reversing};
+use locus_core::cast;
 use locus_odometry::counter::Counter;
 use locus_odometry::error::Error;
 use locus_odometry::quadrature::{Direction, QuadratureDecoder};
@@ -110,7 +111,7 @@ fn run<T: Real>(
     // The estimator is told the encoder's edge spread, as a user would
     // configure it from the encoder's datasheet.
     let config = SpeedConfig {
-        edge_spread: T::from_f64(wave.encoder.spread_counts()),
+        edge_spread: cast(wave.encoder.spread_counts()),
         ..config
     };
     let mut samples = wave.samples(ticks, glitch_prob, seed);

@@ -37,7 +37,7 @@ use locus_core::nalgebra::{Matrix3, Vector1, Vector3};
 use locus_core::{Belief, ChiSquareGate, Ekf, MeasurementModel, wrap_angle};
 use locus_models::laser_wall::{LaserMount, LaserRange, Segment};
 use locus_models::{CountNoise, RearCounts, TricycleRear};
-use locus_odometry::redundant::{Integration, Odometry, Pose as OdoPose, Reading, Selection};
+use locus_odometry::redundant::{Integration, Odometry, Reading, Selection};
 use locus_odometry::{Libm, Tricycle, wrapping_diff};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
@@ -46,9 +46,9 @@ use serde::{Deserialize, Serialize};
 use crate::closed_loop::Error;
 use crate::noise::gauss;
 use crate::robot::{Command, Kinematics, Pose, Robot, Slip, SlipSchedule, Wheel};
-use locus_eval::{Record, Sample, Summary, Tally};
 use crate::sensors::{Encoder, Laser};
 use crate::world::World;
+use locus_eval::{Record, Sample, Summary, Tally};
 
 /// Width of the encoders' wrapping counter (bits).
 const COUNTER_BITS: u32 = locus_odometry::counter::PAPER_BITS;
@@ -477,14 +477,14 @@ pub fn run_tricycle_slip(
         Selection::Rear,
         Integration::Euler,
         Libm,
-        OdoPose::default(),
+        locus_core::Pose::default(),
     );
     let mut rej_odo = Odometry::new(
         tri,
         cfg.rejection.selection(),
         Integration::Euler,
         Libm,
-        OdoPose::default(),
+        locus_core::Pose::default(),
     );
 
     let model = TricycleRear::new(

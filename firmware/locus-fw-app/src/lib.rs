@@ -44,12 +44,12 @@
 pub mod square_data;
 
 use locus_core::nalgebra::{Matrix3, Vector3};
-use locus_core::{Belief, ChiSquareGate, CovarianceUpdate, Ekf, Update};
+use locus_core::{Belief, ChiSquareGate, CovarianceUpdate, Ekf, Pose, Update};
 use locus_models::{
     DiffDrive, IrAssociation, IrOutcome, IrPair, IrPairObservation, Localiser, Odometer,
     WheelTravel,
 };
-use locus_odometry::redundant::{Integration, Motion, Pose};
+use locus_odometry::redundant::{Integration, Motion};
 use locus_odometry::{Cordic, Counter, QuadratureDecoder, Wheel};
 
 /// Samples of the channel levels per filter step (the decoder runs at
@@ -439,7 +439,7 @@ impl Firmware {
             Integration::Midpoint,
             &self.cordic,
         );
-        self.odometry = self.odometry.advance(&inc);
+        self.odometry = inc.apply(&self.odometry);
     }
 
     /// Folds the current state into the checksum and counts the step.
