@@ -3,9 +3,9 @@
 //! "A. Control Module"; spec `MODELS.md` section 3).
 //!
 //! Every routine maps the current pose estimate `(x, y, theta)` (world frame, metres
-//! and radians, `theta` measured counter-clockwise from the x axis) to a unicycle
-//! command `(V, W)`: linear speed in m/s, turn rate in rad/s, positive counter-
-//! clockwise. [`wheel_speeds`] converts it to the two wheel speeds with equation (1)
+//! and radians, `theta` measured counter-clockwise from the x axis) to a body twist
+//! [`Twist`], the unicycle command `(V, W)`: linear speed in m/s, turn rate in
+//! rad/s, positive counter-clockwise. [`wheel_speeds`] converts it to the two wheel speeds with equation (1)
 //! of the paper, `V1 = V + b W / 2` (right wheel) and `V2 = V - b W / 2` (left wheel).
 //!
 //! The steering law, common to the line and the circle, is a saturated
@@ -62,9 +62,11 @@ impl Direction {
     }
 }
 
-/// A unicycle command, the output of every routine.
+/// The body twist commanded by a routine: the unicycle command `(V, W)` of the
+/// robot's reference point (not wheel speeds: [`wheel_speeds`] turns it into
+/// those), the output of every routine.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Command {
+pub struct Twist {
     /// Linear speed V (m/s), positive forwards.
     pub v: f64,
     /// Turn rate W (rad/s), positive counter-clockwise.
@@ -73,7 +75,7 @@ pub struct Command {
     pub done: bool,
 }
 
-impl Command {
+impl Twist {
     /// The stop command of a finished routine: `v = w = 0`, `done = true`.
     pub const DONE: Self = Self {
         v: 0.0,
@@ -82,14 +84,14 @@ impl Command {
     };
 }
 
-/// Wheel speeds `(V1, V2)` (m/s) for a command, paper 001 equation (1):
+/// Wheel speeds `(V1, V2)` (m/s) for a body twist, paper 001 equation (1):
 /// `V1 = V + b W / 2` (right wheel), `V2 = V - b W / 2` (left wheel).
 ///
 /// `wheelbase` is `b`, the distance between the wheels (m).
 #[must_use]
-pub fn wheel_speeds(command: Command, wheelbase: f64) -> (f64, f64) {
-    let half = wheelbase * command.w / 2.0;
-    (command.v + half, command.v - half)
+pub fn wheel_speeds(twist: Twist, wheelbase: f64) -> (f64, f64) {
+    let half = wheelbase * twist.w / 2.0;
+    (twist.v + half, twist.v - half)
 }
 
 /// Controller parameters: reference speeds (which also act as saturation), gains and
@@ -134,8 +136,8 @@ impl Default for Config {
 
 impl Config {
     /// Clamps `(v, w)` to `|v| <= v_ref`, `|w| <= w_ref` (a NaN becomes 0).
-    fn saturate(&self, v: f64, w: f64) -> Command {
-        Command {
+    fn saturate(&self, v: f64, w: f64) -> Twist {
+        Twist {
             v: clamp(v, self.v_ref),
             w: clamp(w, self.w_ref),
             done: false,
@@ -191,11 +193,11 @@ pub enum Segment {
     },
 }
 
-/// A source of commands from pose estimates.
+/// A source of body twists ([`Twist`]) from pose estimates.
 pub trait Controller {
-    /// The command for the current pose estimate. Call once per control step; a
-    /// finished controller keeps returning [`Command::DONE`].
-    fn command(&mut self, pose: Pose) -> Command;
+    /// The body twist for the current pose estimate. Call once per control step; a
+    /// finished controller keeps returning [`Twist::DONE`].
+    fn command(&mut self, pose: Pose) -> Twist;
 }
 
 /// Progress of a routine (private to the steering laws).
@@ -247,12 +249,12 @@ impl Routine {
         self.progress = Progress::Start;
     }
 
-    fn finish(&mut self) -> Command {
+    fn finish(&mut self) -> Twist {
         self.progress = Progress::Done;
-        Command::DONE
+        Twist::DONE
     }
 
-    fn go_xy_theta(&mut self, pose: Pose, x: f64, y: f64, theta: f64) -> Command {
+    fn go_xy_theta(&mut self, pose: Pose, x: f64, y: f64, theta: f64) -> Twist {
         let c = self.config;
         let (dx, dy) = (x - pose.x, y - pose.y);
         let distance = libm::hypot(dx, dy);
@@ -278,7 +280,7 @@ impl Routine {
     /// Shared steering: drive along `tangent` (rad) with cross-track error `e` (m)
     /// (positive left) and signed path curvature `curvature` (1/m) (feed-forward
     /// `W_ff = V curvature`).
-    fn steer(&self, pose: Pose, tangent: f64, e: f64, curvature: f64) -> Command {
+    fn steer(&self, pose: Pose, tangent: f64, e: f64, curvature: f64) -> Twist {
         let c = self.config;
         let desired = tangent - libm::atan(c.k_cross * e);
         let error = wrap_angle(desired - pose.theta);
@@ -286,7 +288,7 @@ impl Routine {
         c.saturate(v, v * curvature + c.k_heading * error)
     }
 
-    fn follow_line(&mut self, pose: Pose, from: Point, to: Point) -> Command {
+    fn follow_line(&mut self, pose: Pose, from: Point, to: Point) -> Twist {
         let (lx, ly) = (to.x - from.x, to.y - from.y);
         let length = libm::hypot(lx, ly);
         if length <= 0.0 || length.is_nan() {
@@ -308,7 +310,7 @@ impl Routine {
         radius: f64,
         direction: Direction,
         arc: Option<f64>,
-    ) -> Command {
+    ) -> Twist {
         if radius.is_nan() || radius <= 0.0 {
             return self.finish();
         }
@@ -334,9 +336,9 @@ impl Routine {
 }
 
 impl Controller for Routine {
-    fn command(&mut self, pose: Pose) -> Command {
+    fn command(&mut self, pose: Pose) -> Twist {
         if self.is_done() {
-            return Command::DONE;
+            return Twist::DONE;
         }
         match self.segment {
             Segment::GoXYTheta { x, y, theta } => self.go_xy_theta(pose, x, y, theta),
@@ -447,7 +449,7 @@ impl FollowPath<4> {
 }
 
 impl<const N: usize> Controller for FollowPath<N> {
-    fn command(&mut self, pose: Pose) -> Command {
+    fn command(&mut self, pose: Pose) -> Twist {
         while let Some(routine) = self.current.as_mut() {
             let command = routine.command(pose);
             if !command.done {
@@ -459,6 +461,6 @@ impl<const N: usize> Controller for FollowPath<N> {
                 .get(self.index)
                 .map(|s| Routine::new(*s, self.config));
         }
-        Command::DONE
+        Twist::DONE
     }
 }

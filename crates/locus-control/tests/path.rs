@@ -3,15 +3,15 @@
 use core::f64::consts::{FRAC_PI_2, PI};
 
 use locus_control::{
-    Command, Config, Controller, Direction, FollowPath, Point, Pose, Routine, Segment,
-    wheel_speeds, wrap_angle,
+    Config, Controller, Direction, FollowPath, Point, Pose, Routine, Segment, Twist, wheel_speeds,
+    wrap_angle,
 };
 use proptest::prelude::*;
 
 const DT: f64 = 0.01;
 
 /// One exact step of a unicycle (arc integration).
-fn step(pose: Pose, c: Command, dt: f64) -> Pose {
+fn step(pose: Pose, c: Twist, dt: f64) -> Pose {
     let dtheta = c.w * dt;
     let mid = pose.theta + dtheta / 2.0;
     Pose::new(
@@ -27,7 +27,7 @@ fn run(
     controller: &mut impl Controller,
     mut pose: Pose,
     steps: usize,
-    mut visit: impl FnMut(usize, Pose, Command),
+    mut visit: impl FnMut(usize, Pose, Twist),
 ) -> (Pose, bool) {
     for i in 0..steps {
         let c = controller.command(pose);
@@ -134,7 +134,7 @@ fn follow_circle_stops_after_arc() {
     assert!(done);
     assert!(end.x.abs() < 0.01 && (end.y - 0.5).abs() < 0.01, "{end:?}");
     assert!(r.is_done());
-    assert_eq!(r.command(end), Command::DONE);
+    assert_eq!(r.command(end), Twist::DONE);
 }
 
 #[test]
@@ -187,14 +187,14 @@ fn square_path_visits_corners_counter_clockwise() {
 #[test]
 fn path_switches_in_same_step_and_empty_path_is_done() {
     let mut empty = FollowPath::<0>::new([], Config::default());
-    assert_eq!(empty.command(Pose::default()), Command::DONE);
+    assert_eq!(empty.command(Pose::default()), Twist::DONE);
     let seg = Segment::FollowLine {
         from: Point::new(0.0, 0.0),
         to: Point::new(1.0, 0.0),
     };
     let mut path = FollowPath::new([seg, seg], Config::default());
     // Past the end of the first: it finishes and the second (also done) too.
-    assert_eq!(path.command(Pose::new(2.0, 0.0, 0.0)), Command::DONE);
+    assert_eq!(path.command(Pose::new(2.0, 0.0, 0.0)), Twist::DONE);
     assert_eq!(path.index(), 2);
     path.reset();
     assert_eq!(path.index(), 0);
@@ -203,7 +203,7 @@ fn path_switches_in_same_step_and_empty_path_is_done() {
 
 #[test]
 fn wheel_speed_formula() {
-    let c = Command {
+    let c = Twist {
         v: 0.1,
         w: 0.5,
         done: false,
@@ -216,7 +216,7 @@ fn wheel_speed_formula() {
 proptest! {
     #[test]
     fn wheel_speeds_invert(v in -1.0..1.0_f64, w in -5.0..5.0_f64, b in 0.05..0.5_f64) {
-        let (v1, v2) = wheel_speeds(Command { v, w, done: false }, b);
+        let (v1, v2) = wheel_speeds(Twist { v, w, done: false }, b);
         prop_assert!(((v1 + v2) / 2.0 - v).abs() < 1e-12);
         prop_assert!(((v1 - v2) / b - w).abs() < 1e-9);
     }
@@ -245,7 +245,7 @@ fn degenerate_segments_finish_at_once() {
     ] {
         assert_eq!(
             Routine::new(seg, Config::default()).command(Pose::default()),
-            Command::DONE
+            Twist::DONE
         );
     }
 }

@@ -22,8 +22,9 @@
 //!    associated with a wall and corrects the filter behind its gate
 //!    ([`Localiser::ir`]); the clock estimator gets
 //!    (robot timestamp, receive time).
-//! 3. The path controller maps the estimate to wheel speeds; a command
-//!    acknowledging the packet is sent. When the laps are done the host
+//! 3. The path controller maps the estimate to a body twist, turned into
+//!    wheel speeds; a command packet carrying them and acknowledging the
+//!    packet is sent. When the laps are done the host
 //!    stops sending (the robot's watchdog stops the wheels) and keeps
 //!    receiving and counting until the robot has been quiet for `quiet`.
 
@@ -291,18 +292,18 @@ pub fn run_host(
         let mut sent = None;
         if !done {
             let est = locus_control::Pose::new(x[0], x[1], x[2]);
-            let mut command = controller.command(est);
-            if command.done {
+            let mut twist = controller.command(est);
+            if twist.done {
                 report.laps += 1;
                 if report.laps >= cfg.laps {
                     done = true;
                 } else {
                     controller.reset();
-                    command = controller.command(est);
+                    twist = controller.command(est);
                 }
             }
             if !done {
-                let (v1, v2) = wheel_speeds(command, cfg.localiser.wheelbase);
+                let (v1, v2) = wheel_speeds(twist, cfg.localiser.wheelbase);
                 let (right, left) = (v1 as f32, v2 as f32);
                 send(socket, t.sequence, right, left)?;
                 report.commands_sent += 1;

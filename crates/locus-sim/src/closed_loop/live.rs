@@ -10,8 +10,8 @@ use super::SquareSim;
 use super::record::mat3;
 use super::{SquareConfig, StepRecord};
 
-/// Teleoperation of one step: the wheel command `(V, W)` (m/s, rad/s)
-/// used instead of the path controller's.
+/// Teleoperation of one step: the body twist `(V, W)` (m/s, rad/s) used
+/// instead of the path controller's.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Teleop {
     /// Linear speed `V` (m/s).
@@ -125,11 +125,12 @@ pub struct CorrectionDetail {
 pub struct SimStep {
     /// The step's record (as logged by `locus run`).
     pub record: StepRecord,
-    /// The command `(V, W)` (m/s, rad/s) applied.
-    pub command: (f64, f64),
+    /// The body twist `(V, W)` (m/s, rad/s) applied (from the path
+    /// controller or teleoperation).
+    pub twist: (f64, f64),
     /// The wheel speeds `(V1, V2)` (m/s, right and left).
     pub wheel_speeds: (f64, f64),
-    /// Whether the command came from teleoperation.
+    /// Whether the twist came from teleoperation.
     pub teleop: bool,
     /// The correction's details when a reading was associated and used
     /// (and [`SquareSim::with_details`] is on).

@@ -1,7 +1,7 @@
 //! The `square` closed loop as a stepper ([`SquareSim`]) and a run
 //! ([`run_square`]).
 
-use locus_control::{Command, Controller, FollowPath, wheel_speeds};
+use locus_control::{Controller, FollowPath, Twist, wheel_speeds};
 use locus_core::{Belief, Ekf};
 use locus_models::{IrOutcome, IrPairObservation, Localiser, WheelTravel};
 
@@ -157,7 +157,7 @@ impl SquareSim {
         self.finished
     }
 
-    /// Runs one step of `dt`: with `teleop`, its command instead of the
+    /// Runs one step of `dt`: with `teleop`, its body twist instead of the
     /// path controller's (the controller then neither advances nor ends
     /// the run). `Ok(None)` once the run has ended (the laps are done or
     /// `max_time` is reached; teleoperation still runs after the laps,
@@ -175,10 +175,10 @@ impl SquareSim {
             return Ok(None);
         }
         let before = *self.localiser.belief();
-        let Some(command) = self.command(teleop) else {
+        let Some(twist) = self.twist(teleop) else {
             return Ok(None);
         };
-        let (v1, v2) = wheel_speeds(command, self.cfg.wheelbase);
+        let (v1, v2) = wheel_speeds(twist, self.cfg.wheelbase);
         let u = self.predict((v1, v2))?;
         let (reading, corrected) = self.correct()?;
         let gate = self.localiser.filter.rules().ekf.gate;
@@ -188,19 +188,19 @@ impl SquareSim {
         self.steps += 1;
         Ok(Some(SimStep {
             record: self.record(&u, reading, corrected.as_ref()),
-            command: (command.v, command.w),
+            twist: (twist.v, twist.w),
             wheel_speeds: (v1, v2),
             teleop: teleop.is_some(),
             correction: detail,
         }))
     }
 
-    /// Step 1: the command, from `teleop` or from the path controller on
-    /// the estimate; `None` (and the run finished) when the last lap is
+    /// Step 1: the body twist, from `teleop` or from the path controller
+    /// on the estimate; `None` (and the run finished) when the last lap is
     /// done.
-    fn command(&mut self, teleop: Option<Teleop>) -> Option<Command> {
+    fn twist(&mut self, teleop: Option<Teleop>) -> Option<Twist> {
         if let Some(t) = teleop {
-            return Some(Command {
+            return Some(Twist {
                 v: t.v,
                 w: t.w,
                 done: false,
@@ -208,17 +208,17 @@ impl SquareSim {
         }
         let x = &self.localiser.belief().x;
         let est = locus_control::Pose::new(x[0], x[1], x[2]);
-        let mut command = self.controller.command(est);
-        if command.done {
+        let mut twist = self.controller.command(est);
+        if twist.done {
             self.laps += 1;
             if self.laps >= self.cfg.laps {
                 self.finished = true;
                 return None;
             }
             self.controller.reset();
-            command = self.controller.command(est);
+            twist = self.controller.command(est);
         }
-        Some(command)
+        Some(twist)
     }
 
     /// Steps 2-4: the plant moves with wheel speeds `(V1, V2)` (m/s); the
