@@ -29,6 +29,8 @@ pub use closed_loop::{
     CorrectionDetail, LiveParams, SimStep, SquareConfig, SquareSim, StepRecord, Teleop, run_square,
 };
 pub use error::Error;
-pub use robot::{Command, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, WheelTravel};
+pub use robot::{
+    DriveCommand, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, WheelTravel,
+};
 pub use sensors::{Encoder, IrPairSensor, Laser, SensorError, SharpIr};
 pub use world::{Hit, World};

@@ -34,7 +34,7 @@ use rand::SeedableRng;
 use rand::rngs::StdRng;
 
 use crate::closed_loop::{Error as SimError, NoiseModel, SquareConfig};
-use crate::robot::{Command, Pose, Robot};
+use crate::robot::{DriveCommand, Pose, Robot};
 use crate::sensors::{Encoder, IrPairSensor, SharpIr};
 use crate::world::World;
 
@@ -179,7 +179,7 @@ impl Sim {
     fn step(&mut self, right: f64, left: f64, dt: f64) -> Result<(Pose, Option<[f32; 2]>), Error> {
         let out = self
             .robot
-            .step(&Command::Wheels { left, right }, dt)
+            .step(&DriveCommand::Wheels { left, right }, dt)
             .map_err(SimError::from)?;
         self.enc[0]
             .advance(out.measured_travel.right * self.right_scale, &mut self.rng)

@@ -8,10 +8,10 @@
 //! the rear axle (tricycle, spec section 5).
 //!
 //! # Integration
-//! A command is held constant over a step `dt`, so the body moves with a
-//! constant speed `v` (m/s) and turn rate `w` (rad/s): the exact motion is a
-//! circular arc (a straight line when `w = 0`). [`Kinematics::step`]
-//! integrates that arc in closed form,
+//! A [`DriveCommand`] is held constant over a step `dt`, so the body moves
+//! with a constant speed `v` (m/s) and turn rate `w` (rad/s): the exact
+//! motion is a circular arc (a straight line when `w = 0`).
+//! [`Kinematics::step`] integrates that arc in closed form,
 //!
 //! ```text
 //! x' = x + v dt sinc(w dt / 2) cos(theta + w dt / 2)
@@ -42,7 +42,7 @@ pub enum RobotError {
         /// The kinematics' name.
         kinematics: &'static str,
         /// The command given.
-        command: Command,
+        command: DriveCommand,
     },
     /// A command value, `dt` or the pose is not finite, or `dt < 0`.
     #[error("non-finite or invalid input: {0}")]
@@ -82,9 +82,13 @@ pub enum Wheel {
     Front,
 }
 
-/// A command held constant over one step.
+/// What the simulated robot's drive is told to do over one step (held
+/// constant over it), in the terms of its [`Kinematics`]: wheel or tread
+/// speeds for a differential drive or skid steer, front-wheel speed and
+/// steering angle for a tricycle. Not a body twist (`locus_control::Twist`)
+/// and not the link's packet (`locus_link::CommandPacket`).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Command {
+pub enum DriveCommand {
     /// Ground speeds of the left and right wheels or treads (m/s), for
     /// [`Kinematics::DifferentialDrive`] and [`Kinematics::SkidSteer`].
     Wheels {
@@ -189,13 +193,16 @@ impl Kinematics {
 
     /// Body speed `v` (m/s) of the reference point and turn rate `w` (rad/s)
     /// under `command`. Tricycle: `v = s cos(phi)`, `w = s sin(phi) / L`.
-    pub fn body_rates(&self, command: &Command) -> Result<(f64, f64), RobotError> {
+    pub fn body_rates(&self, command: &DriveCommand) -> Result<(f64, f64), RobotError> {
         match (*self, *command) {
-            (Self::DifferentialDrive { wheelbase: b, .. }, Command::Wheels { left, right })
-            | (Self::SkidSteer { effective_track: b }, Command::Wheels { left, right }) => {
+            (
+                Self::DifferentialDrive { wheelbase: b, .. },
+                DriveCommand::Wheels { left, right },
+            )
+            | (Self::SkidSteer { effective_track: b }, DriveCommand::Wheels { left, right }) => {
                 Ok((0.5 * (left + right), (right - left) / b))
             }
-            (Self::Tricycle { wheelbase, .. }, Command::Steered { speed, steering }) => {
+            (Self::Tricycle { wheelbase, .. }, DriveCommand::Steered { speed, steering }) => {
                 let (s, c) = steering.sin_cos();
                 Ok((speed * c, speed * s / wheelbase))
             }
@@ -212,7 +219,7 @@ impl Kinematics {
     pub fn step(
         &self,
         pose: &Pose,
-        command: &Command,
+        command: &DriveCommand,
         dt: f64,
     ) -> Result<(Pose, WheelTravel), RobotError> {
         if !(dt.is_finite() && dt >= 0.0) {
@@ -226,18 +233,20 @@ impl Kinematics {
             return Err(RobotError::InvalidInput("command"));
         }
         let travel = match (*self, *command) {
-            (Self::Tricycle { rear_track, .. }, Command::Steered { speed, .. }) => WheelTravel {
-                left: (v - 0.5 * w * rear_track) * dt,
-                right: (v + 0.5 * w * rear_track) * dt,
-                front: speed * dt,
-            },
-            (_, Command::Wheels { left, right }) => WheelTravel {
+            (Self::Tricycle { rear_track, .. }, DriveCommand::Steered { speed, .. }) => {
+                WheelTravel {
+                    left: (v - 0.5 * w * rear_track) * dt,
+                    right: (v + 0.5 * w * rear_track) * dt,
+                    front: speed * dt,
+                }
+            }
+            (_, DriveCommand::Wheels { left, right }) => WheelTravel {
                 left: left * dt,
                 right: right * dt,
                 front: 0.0,
             },
             // body_rates has rejected every other pairing.
-            (_, Command::Steered { .. }) => WheelTravel::default(),
+            (_, DriveCommand::Steered { .. }) => WheelTravel::default(),
         };
         Ok((arc(pose, v, w, dt), travel))
     }
@@ -415,7 +424,7 @@ impl Robot {
     /// Advances the robot by `dt` (s) under `command` (exact arc), returning
     /// the new pose, true and measured wheel travel. On error the robot is
     /// unchanged.
-    pub fn step(&mut self, command: &Command, dt: f64) -> Result<StepOutput, RobotError> {
+    pub fn step(&mut self, command: &DriveCommand, dt: f64) -> Result<StepOutput, RobotError> {
         let (pose, true_travel) = self.kinematics.step(&self.pose, command, dt)?;
         let measured_travel = self.slip.apply(&self.odometer, &true_travel);
         self.odometer.left += true_travel.left.abs();
@@ -436,7 +445,7 @@ impl Robot {
     /// error (the robot keeps the steps already taken).
     pub fn run(
         &mut self,
-        command: &Command,
+        command: &DriveCommand,
         dt: f64,
         n: usize,
         sub: usize,

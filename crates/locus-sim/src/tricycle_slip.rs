@@ -45,7 +45,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::closed_loop::Error;
 use crate::noise::gauss;
-use crate::robot::{Command, Kinematics, Pose, Robot, Slip, SlipSchedule, Wheel};
+use crate::robot::{DriveCommand, Kinematics, Pose, Robot, Slip, SlipSchedule, Wheel};
 use crate::sensors::{Encoder, Laser};
 use crate::world::World;
 use locus_eval::{Record, Sample, Summary, Tally};
@@ -524,7 +524,7 @@ pub fn run_tricycle_slip(
         let front_speed = v / phi.cos();
         for _ in 0..n {
             let out = robot.step(
-                &Command::Steered {
+                &DriveCommand::Steered {
                     speed: front_speed,
                     steering: phi,
                 },

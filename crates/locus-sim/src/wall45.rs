@@ -66,7 +66,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::closed_loop::Error;
 use crate::noise::gauss;
-use crate::robot::{Command, Kinematics, Pose, Robot};
+use crate::robot::{DriveCommand, Kinematics, Pose, Robot};
 use crate::sensors::Laser;
 use crate::world::World;
 use locus_eval::{Record, Sample, Summary, Tally};
@@ -524,7 +524,7 @@ pub fn run_wall45(
                 true_x = model.f(&true_x, &u, &q);
                 u
             } else {
-                let out = robot.step(&Command::Wheels { left, right }, cfg.dt)?;
+                let out = robot.step(&DriveCommand::Wheels { left, right }, cfg.dt)?;
                 true_x = Vector3::new(out.pose.x, out.pose.y, out.pose.theta);
                 let (ml, mr) = if moving {
                     (

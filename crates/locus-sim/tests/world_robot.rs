@@ -5,7 +5,7 @@ use core::f64::consts::{FRAC_PI_2, PI, TAU};
 use locus_core::wrap_angle;
 use locus_models::laser_wall::LaserMount;
 use locus_sim::robot::{
-    Command, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, Wheel, WheelTravel,
+    DriveCommand, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, Wheel, WheelTravel,
 };
 use locus_sim::world::World;
 use rand::SeedableRng;
@@ -71,7 +71,7 @@ fn straight_line_is_exact() {
     let mut r = Robot::new(diff_drive(), Pose::new(0.1, -0.2, 0.3));
     let out = r
         .run(
-            &Command::Wheels {
+            &DriveCommand::Wheels {
                 left: 0.2,
                 right: 0.2,
             },
@@ -100,7 +100,7 @@ fn full_circle_closes_on_itself() {
         let dt = 2.0 * TAU / f64::from(n);
         let out = r
             .run(
-                &Command::Wheels {
+                &DriveCommand::Wheels {
                     left: vl,
                     right: vr,
                 },
@@ -136,7 +136,7 @@ fn tricycle_and_skid_steer_arcs() {
     let mut r = Robot::new(k, Pose::default());
     let out = r
         .run(
-            &Command::Steered {
+            &DriveCommand::Steered {
                 speed: s,
                 steering: phi,
             },
@@ -161,7 +161,7 @@ fn tricycle_and_skid_steer_arcs() {
     let (p, t) = k
         .step(
             &Pose::default(),
-            &Command::Wheels {
+            &DriveCommand::Wheels {
                 left: -0.25,
                 right: 0.25,
             },
@@ -181,7 +181,7 @@ fn tricycle_and_skid_steer_arcs() {
     let mut r = Robot::new(k, Pose::default());
     assert!(matches!(
         r.step(
-            &Command::Steered {
+            &DriveCommand::Steered {
                 speed: 1.0,
                 steering: 0.0
             },
@@ -191,7 +191,7 @@ fn tricycle_and_skid_steer_arcs() {
     ));
     assert!(
         r.step(
-            &Command::Wheels {
+            &DriveCommand::Wheels {
                 left: 1.0,
                 right: 1.0
             },
@@ -212,7 +212,7 @@ fn slip_scales_only_the_affected_wheel_inside_the_zone() {
     // 0.07 m steps: zone edges fall inside steps (partial overlap).
     let out = r
         .run(
-            &Command::Wheels {
+            &DriveCommand::Wheels {
                 left: 0.7,
                 right: 0.7,
             },
@@ -257,7 +257,7 @@ fn slip_scales_only_the_affected_wheel_inside_the_zone() {
         Robot::new(diff_drive(), Pose::default()).with_slip(SlipSchedule { zones: vec![zone] });
     let o = r
         .step(
-            &Command::Wheels {
+            &DriveCommand::Wheels {
                 left: -0.2,
                 right: -0.2,
             },

@@ -13,7 +13,7 @@ use rand::rngs::StdRng;
 
 use super::{Error, SquareConfig};
 use crate::noise::gauss;
-use crate::robot::{Command, Kinematics, Pose, Robot, SlipSchedule, Wheel};
+use crate::robot::{DriveCommand, Kinematics, Pose, Robot, SlipSchedule, Wheel};
 use crate::sensors::{Encoder, IrPairSensor, SharpIr};
 use crate::world::World;
 
@@ -143,7 +143,7 @@ impl Plant {
         (v1, v2): (f64, f64),
     ) -> Result<[u32; 2], Error> {
         let out = self.robot.step(
-            &Command::Wheels {
+            &DriveCommand::Wheels {
                 left: v2,
                 right: v1,
             },
