@@ -30,7 +30,7 @@ pub use closed_loop::{
 };
 pub use error::Error;
 pub use robot::{
-    DriveCommand, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, WheelTravel,
+    DriveCommand, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, TravelByWheel,
 };
 pub use sensors::{Encoder, IrPairSensor, Laser, SensorError, SharpIr};
 pub use world::{Hit, World};

@@ -131,10 +131,13 @@ pub enum Kinematics {
     },
 }
 
-/// The true travel of each wheel over a step (m, signed: positive forwards).
-/// `front` is 0 for robots without a front wheel.
+/// A travel (m) for each wheel of the simulated robot, keyed by [`Wheel`]:
+/// a step's true or measured travel (signed: positive forwards), or the
+/// odometers' cumulative absolute true travel ([`Robot::odometer`]). `front`
+/// is 0 for robots without a front wheel. Not the filter's odometry input
+/// (`locus_models::WheelTravel`, paper 001's `d1` right, `d2` left).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct WheelTravel {
+pub struct TravelByWheel {
     /// Left (rear-left) wheel or tread (m).
     pub left: f64,
     /// Right (rear-right) wheel or tread (m).
@@ -143,7 +146,7 @@ pub struct WheelTravel {
     pub front: f64,
 }
 
-impl WheelTravel {
+impl TravelByWheel {
     /// The travel of `wheel` (m).
     pub fn get(&self, wheel: Wheel) -> f64 {
         match wheel {
@@ -221,7 +224,7 @@ impl Kinematics {
         pose: &Pose,
         command: &DriveCommand,
         dt: f64,
-    ) -> Result<(Pose, WheelTravel), RobotError> {
+    ) -> Result<(Pose, TravelByWheel), RobotError> {
         if !(dt.is_finite() && dt >= 0.0) {
             return Err(RobotError::InvalidInput("dt"));
         }
@@ -234,19 +237,19 @@ impl Kinematics {
         }
         let travel = match (*self, *command) {
             (Self::Tricycle { rear_track, .. }, DriveCommand::Steered { speed, .. }) => {
-                WheelTravel {
+                TravelByWheel {
                     left: (v - 0.5 * w * rear_track) * dt,
                     right: (v + 0.5 * w * rear_track) * dt,
                     front: speed * dt,
                 }
             }
-            (_, DriveCommand::Wheels { left, right }) => WheelTravel {
+            (_, DriveCommand::Wheels { left, right }) => TravelByWheel {
                 left: left * dt,
                 right: right * dt,
                 front: 0.0,
             },
             // body_rates has rejected every other pairing.
-            (_, DriveCommand::Steered { .. }) => WheelTravel::default(),
+            (_, DriveCommand::Steered { .. }) => TravelByWheel::default(),
         };
         Ok((arc(pose, v, w, dt), travel))
     }
@@ -368,7 +371,7 @@ impl SlipSchedule {
     /// The measured travel for one step (m): `travel` plus each zone's extra
     /// on its wheel, given the odometers (cumulative absolute true travel, m)
     /// before the step.
-    pub fn apply(&self, odometer: &WheelTravel, travel: &WheelTravel) -> WheelTravel {
+    pub fn apply(&self, odometer: &TravelByWheel, travel: &TravelByWheel) -> TravelByWheel {
         let mut measured = *travel;
         for z in &self.zones {
             let s0 = odometer.get(z.wheel);
@@ -385,9 +388,9 @@ pub struct StepOutput {
     /// The true pose after the step.
     pub pose: Pose,
     /// Each wheel's true travel in the step (m).
-    pub true_travel: WheelTravel,
+    pub true_travel: TravelByWheel,
     /// Each wheel's travel as its encoder sees it, slip included (m).
-    pub measured_travel: WheelTravel,
+    pub measured_travel: TravelByWheel,
 }
 
 /// A simulated robot: kinematics, true pose, slip and per-wheel odometers.
@@ -400,7 +403,7 @@ pub struct Robot {
     /// Slip zones.
     pub slip: SlipSchedule,
     /// Cumulative absolute true travel of each wheel (m).
-    pub odometer: WheelTravel,
+    pub odometer: TravelByWheel,
 }
 
 impl Robot {
@@ -410,7 +413,7 @@ impl Robot {
             kinematics,
             pose,
             slip: SlipSchedule::none(),
-            odometer: WheelTravel::default(),
+            odometer: TravelByWheel::default(),
         }
     }
 
@@ -457,8 +460,8 @@ impl Robot {
         for _ in 0..n {
             let mut acc = StepOutput {
                 pose: self.pose,
-                true_travel: WheelTravel::default(),
-                measured_travel: WheelTravel::default(),
+                true_travel: TravelByWheel::default(),
+                measured_travel: TravelByWheel::default(),
             };
             for _ in 0..sub {
                 let o = self.step(command, h)?;

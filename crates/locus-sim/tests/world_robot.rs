@@ -5,7 +5,7 @@ use core::f64::consts::{FRAC_PI_2, PI, TAU};
 use locus_core::wrap_angle;
 use locus_models::laser_wall::LaserMount;
 use locus_sim::robot::{
-    DriveCommand, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, Wheel, WheelTravel,
+    DriveCommand, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, TravelByWheel, Wheel,
 };
 use locus_sim::world::World;
 use rand::SeedableRng;
@@ -171,7 +171,7 @@ fn tricycle_and_skid_steer_arcs() {
     assert!(close(p.theta, 1.0, 1e-15) && p.x == 0.0 && p.y == 0.0);
     assert_eq!(
         t,
-        WheelTravel {
+        TravelByWheel {
             left: -0.25,
             right: 0.25,
             front: 0.0
@@ -200,7 +200,7 @@ fn tricycle_and_skid_steer_arcs() {
         .is_err()
     );
     assert_eq!(r.pose, Pose::default());
-    assert_eq!(r.odometer, WheelTravel::default());
+    assert_eq!(r.odometer, TravelByWheel::default());
 }
 
 #[test]
