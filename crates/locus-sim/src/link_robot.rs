@@ -119,7 +119,7 @@ impl Default for RobotConfig {
 pub struct RobotReport {
     /// True pose after each telemetry packet `(sequence, pose)` (sequence
     /// 0: the start).
-    pub truth: Vec<(u32, Pose)>,
+    pub truth: Vec<(u32, Pose<f64>)>,
     /// Telemetry packets sent.
     pub sent: u64,
     /// The command receiver's counters.
@@ -176,7 +176,12 @@ impl Sim {
 
     /// One step under wheel speeds `(right, left)` (m/s): the new pose and
     /// the IR reading (m).
-    fn step(&mut self, right: f64, left: f64, dt: f64) -> Result<(Pose, Option<[f32; 2]>), Error> {
+    fn step(
+        &mut self,
+        right: f64,
+        left: f64,
+        dt: f64,
+    ) -> Result<(Pose<f64>, Option<[f32; 2]>), Error> {
         let out = self
             .robot
             .step(&DriveCommand::Wheels { left, right }, dt)

@@ -49,27 +49,10 @@ pub enum RobotError {
     InvalidInput(&'static str),
 }
 
-/// A planar pose (m, m, rad), world frame.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Pose {
-    /// Position along the world x axis (m).
-    pub x: f64,
-    /// Position along the world y axis (m).
-    pub y: f64,
-    /// Heading from the world x axis, counter-clockwise (rad), in `(-pi, pi]`.
-    pub theta: f64,
-}
-
-impl Pose {
-    /// The pose `(x, y, theta)` (m, m, rad); `theta` is wrapped to `(-pi, pi]`.
-    pub fn new(x: f64, y: f64, theta: f64) -> Self {
-        Self {
-            x,
-            y,
-            theta: locus_core::wrap_angle(theta),
-        }
-    }
-}
+/// The robot's pose is Locus's one planar pose, `locus_core::Pose<f64>`:
+/// `(x, y, theta)` (m, m, rad), world frame; [`Pose::new`] wraps `theta` to
+/// `(-pi, pi]`, as every pose the robot moves to is.
+pub use locus_core::Pose;
 
 /// A wheel (or tread) of a robot.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -177,7 +160,7 @@ fn sinc(a: f64) -> f64 {
 
 /// Exact arc: pose after moving at speed `v` (m/s) and turn rate `w` (rad/s)
 /// for `dt` (s).
-fn arc(pose: &Pose, v: f64, w: f64, dt: f64) -> Pose {
+fn arc(pose: &Pose<f64>, v: f64, w: f64, dt: f64) -> Pose<f64> {
     let half = 0.5 * w * dt;
     let chord = v * dt * sinc(half);
     let (s, c) = (pose.theta + half).sin_cos();
@@ -221,10 +204,10 @@ impl Kinematics {
     /// `(v -+ w D/2) dt`, the front wheel `s dt`.
     pub fn step(
         &self,
-        pose: &Pose,
+        pose: &Pose<f64>,
         command: &DriveCommand,
         dt: f64,
-    ) -> Result<(Pose, TravelByWheel), RobotError> {
+    ) -> Result<(Pose<f64>, TravelByWheel), RobotError> {
         if !(dt.is_finite() && dt >= 0.0) {
             return Err(RobotError::InvalidInput("dt"));
         }
@@ -386,7 +369,7 @@ impl SlipSchedule {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepOutput {
     /// The true pose after the step.
-    pub pose: Pose,
+    pub pose: Pose<f64>,
     /// Each wheel's true travel in the step (m).
     pub true_travel: TravelByWheel,
     /// Each wheel's travel as its encoder sees it, slip included (m).
@@ -399,7 +382,7 @@ pub struct Robot {
     /// Ground-truth kinematics.
     pub kinematics: Kinematics,
     /// True pose.
-    pub pose: Pose,
+    pub pose: Pose<f64>,
     /// Slip zones.
     pub slip: SlipSchedule,
     /// Cumulative absolute true travel of each wheel (m).
@@ -408,7 +391,7 @@ pub struct Robot {
 
 impl Robot {
     /// A robot at `pose` with no slip and zeroed odometers.
-    pub fn new(kinematics: Kinematics, pose: Pose) -> Self {
+    pub fn new(kinematics: Kinematics, pose: Pose<f64>) -> Self {
         Self {
             kinematics,
             pose,

@@ -96,7 +96,7 @@ impl World {
     /// [`LaserMount::sensor_position`] and [`LaserMount::beam_direction`]).
     pub fn raycast_mount(
         &self,
-        pose: &Pose,
+        pose: &Pose<f64>,
         mount: &LaserMount<f64>,
         max_range: f64,
     ) -> Option<Hit> {

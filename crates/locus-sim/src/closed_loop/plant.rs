@@ -23,7 +23,7 @@ impl SquareConfig {
     /// the slip bumps of each wheel over the first lap. Draws from `rng` in
     /// this fixed order, so [`run_square`](super::run_square) and the
     /// robot-link endpoint simulate the same robot from the same seed.
-    pub fn true_robot(&self, rng: &mut StdRng) -> (Robot, Pose) {
+    pub fn true_robot(&self, rng: &mut StdRng) -> (Robot, Pose<f64>) {
         let (s, sd) = (self.start, self.initial_std);
         let true_start = Pose::new(
             s[0] + gauss(rng, sd[0]),
@@ -77,7 +77,7 @@ pub(super) struct Plant {
     pub(super) ir: IrPairSensor,
     /// The ideal mode's true state `[x, y, theta]`.
     true_x: Vector3<f64>,
-    truth: Pose,
+    truth: Pose<f64>,
 }
 
 impl Plant {
@@ -110,7 +110,7 @@ impl Plant {
     }
 
     /// The true pose now.
-    pub(super) fn truth(&self) -> Pose {
+    pub(super) fn truth(&self) -> Pose<f64> {
         self.truth
     }
 

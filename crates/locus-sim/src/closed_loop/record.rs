@@ -15,7 +15,7 @@ pub struct StepRecord {
     /// Simulated time at the end of the step (s).
     pub time: f64,
     /// True pose.
-    pub truth: Pose,
+    pub truth: Pose<f64>,
     /// EKF estimate `[x, y, theta]` (m, m, rad).
     pub ekf: [f64; 3],
     /// EKF covariance of `[x, y, theta]` (m^2, m rad, rad^2), symmetric.
@@ -141,7 +141,7 @@ impl Record for StepRecord {
 
 /// NEES `e^T P^-1 e` of `x` against `truth` (heading error wrapped); NaN
 /// if `P` is not positive definite.
-pub(super) fn nees(x: &Vector3<f64>, p: &Matrix3<f64>, truth: &Pose) -> f64 {
+pub(super) fn nees(x: &Vector3<f64>, p: &Matrix3<f64>, truth: &Pose<f64>) -> f64 {
     let e = Vector3::new(
         truth.x - x[0],
         truth.y - x[1],

@@ -117,7 +117,7 @@ impl SquareSim {
 
     /// The true pose now.
     #[must_use]
-    pub fn truth(&self) -> Pose {
+    pub fn truth(&self) -> Pose<f64> {
         self.plant.truth()
     }
 
