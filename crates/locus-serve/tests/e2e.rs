@@ -7,7 +7,7 @@
 //! `LOCUS_CHROMEDRIVER` (default `/usr/bin/chromedriver`) and
 //! `LOCUS_CHROMIUM` (default `/usr/bin/chromium`).
 //!
-//! With `LOCUS_SCREENSHOTS=DIR` the test also writes the README's
+//! With `LOCUS_SCREENSHOTS=DIR` the test also writes docs/serve.md's
 //! screenshots into DIR (e.g. `LOCUS_SCREENSHOTS=docs/img`, relative to
 //! the workspace root).
 #![allow(
