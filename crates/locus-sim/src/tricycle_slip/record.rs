@@ -1,0 +1,119 @@
+//! The logged step of `tricycle-slip` ([`TricycleSlipRecord`]) and its CSV
+//! row.
+
+use locus_core::wrap_angle;
+use locus_eval::{Record, Sample};
+use locus_odometry::redundant::Reading;
+
+/// One step of `tricycle-slip` (SI units, world frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TricycleSlipRecord {
+    /// The common figures; its odometry is the rear-only dead reckoning.
+    pub sample: Sample,
+    /// The slip-rejecting dead reckoning `[x, y, theta]` (m, m, rad).
+    pub slip_rejecting: [f64; 3],
+    /// The rear-only dead reckoning `[x, y, theta]` (m, m, rad).
+    pub rear_only: [f64; 3],
+    /// The step's encoder counts (left, right, front, steering).
+    pub reading: Reading,
+    /// Laser ranges of the beams this step (m), `None` when not scanned or
+    /// no hit.
+    pub ranges: [Option<f64>; 3],
+}
+
+impl TricycleSlipRecord {
+    /// Position error (m) and wrapped heading error (rad) of the
+    /// slip-rejecting odometry against the truth.
+    #[must_use]
+    pub fn slip_rejecting_error(&self) -> (f64, f64) {
+        let s = &self.sample;
+        (
+            (s.truth[0] - self.slip_rejecting[0]).hypot(s.truth[1] - self.slip_rejecting[1]),
+            wrap_angle(s.truth_heading - self.slip_rejecting[2]),
+        )
+    }
+
+    /// Position error (m) and wrapped heading error (rad) of the rear-only
+    /// odometry against the truth.
+    #[must_use]
+    pub fn rear_only_error(&self) -> (f64, f64) {
+        let s = &self.sample;
+        (
+            (s.truth[0] - self.rear_only[0]).hypot(s.truth[1] - self.rear_only[1]),
+            wrap_angle(s.truth_heading - self.rear_only[2]),
+        )
+    }
+}
+
+impl Record for TricycleSlipRecord {
+    fn csv_header() -> String {
+        [
+            "step",
+            "time[s]",
+            "true_x[m]",
+            "true_y[m]",
+            "true_theta[rad]",
+            "ekf_x[m]",
+            "ekf_y[m]",
+            "ekf_theta[rad]",
+            "p_xx[m2]",
+            "p_yy[m2]",
+            "p_thth[rad2]",
+            "p_xy[m2]",
+            "rear_odo_x[m]",
+            "rear_odo_y[m]",
+            "rear_odo_theta[rad]",
+            "slip_rej_odo_x[m]",
+            "slip_rej_odo_y[m]",
+            "slip_rej_odo_theta[rad]",
+            "n_l",
+            "n_r",
+            "n_f",
+            "n_s",
+            "range_0[m]",
+            "range_1[m]",
+            "range_2[m]",
+            "nees",
+        ]
+        .join(",")
+    }
+
+    fn csv_row(&self) -> String {
+        let s = &self.sample;
+        let f = |v: f64| format!("{v:.9}");
+        let opt = |v: Option<f64>| v.map_or_else(String::new, |v| format!("{v:.9}"));
+        [
+            s.step.to_string(),
+            format!("{:.2}", s.time),
+            f(s.truth[0]),
+            f(s.truth[1]),
+            f(s.truth_heading),
+            f(s.estimate[0]),
+            f(s.estimate[1]),
+            f(s.estimate_heading),
+            format!("{:.6e}", s.covariance[0][0]),
+            format!("{:.6e}", s.covariance[1][1]),
+            format!("{:.6e}", s.covariance[2][2]),
+            format!("{:.6e}", s.covariance[0][1]),
+            f(self.rear_only[0]),
+            f(self.rear_only[1]),
+            f(self.rear_only[2]),
+            f(self.slip_rejecting[0]),
+            f(self.slip_rejecting[1]),
+            f(self.slip_rejecting[2]),
+            self.reading.n_l.to_string(),
+            self.reading.n_r.to_string(),
+            self.reading.n_f.to_string(),
+            self.reading.n_s.to_string(),
+            opt(self.ranges[0]),
+            opt(self.ranges[1]),
+            opt(self.ranges[2]),
+            format!("{:.6}", s.nees),
+        ]
+        .join(",")
+    }
+
+    fn sample(&self) -> Sample {
+        self.sample
+    }
+}

@@ -1,0 +1,98 @@
+//! The logged step of `wall45` ([`Wall45Record`]) and its CSV row.
+
+use locus_eval::{Record, Sample};
+
+/// One step of `wall45` (SI units, world frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Wall45Record {
+    /// The common figures (truth, estimate, covariance, odometry alone,
+    /// NEES, NIS).
+    pub sample: Sample,
+    /// The Table III instant (1..=6) whose dwell ends at this step, if any.
+    pub instant: Option<usize>,
+    /// Whether the robot was moving during the step.
+    pub moving: bool,
+    /// Measured tread speeds `[V_L, V_R]` (m/s) given to the filter.
+    pub tread_speeds: [f64; 2],
+    /// The laser range reading (m), if the beam hit the wall.
+    pub range: Option<f64>,
+    /// Innovation of the correction (m): the range component (`u` for the
+    /// paper's model, `gamma` for the exact one), if corrected.
+    pub innovation: Option<f64>,
+}
+
+fn fmt_opt(v: Option<f64>) -> String {
+    v.map_or_else(String::new, |v| format!("{v:.9}"))
+}
+
+impl Record for Wall45Record {
+    fn csv_header() -> String {
+        [
+            "step",
+            "time[s]",
+            "instant",
+            "moving",
+            "true_x[m]",
+            "true_y[m]",
+            "true_theta[rad]",
+            "ekf_x[m]",
+            "ekf_y[m]",
+            "ekf_theta[rad]",
+            "p_xx[m2]",
+            "p_yy[m2]",
+            "p_thth[rad2]",
+            "p_xy[m2]",
+            "odo_x[m]",
+            "odo_y[m]",
+            "odo_theta_err[rad]",
+            "v_l[m/s]",
+            "v_r[m/s]",
+            "range[m]",
+            "innovation[m]",
+            "nis",
+            "applied",
+            "nees",
+        ]
+        .join(",")
+    }
+
+    fn csv_row(&self) -> String {
+        let s = &self.sample;
+        let f = |v: f64| format!("{v:.9}");
+        let (odo, odo_th) = s.odometry.unwrap_or(([f64::NAN; 3], f64::NAN));
+        let (nis, applied) = s.correction.map_or((None, String::new()), |(n, _, a)| {
+            (Some(n), u8::from(a).to_string())
+        });
+        [
+            s.step.to_string(),
+            format!("{:.2}", s.time),
+            self.instant.map_or_else(String::new, |i| i.to_string()),
+            u8::from(self.moving).to_string(),
+            f(s.truth[0]),
+            f(s.truth[1]),
+            f(s.truth_heading),
+            f(s.estimate[0]),
+            f(s.estimate[1]),
+            f(s.estimate_heading),
+            format!("{:.6e}", s.covariance[0][0]),
+            format!("{:.6e}", s.covariance[1][1]),
+            format!("{:.6e}", s.covariance[2][2]),
+            format!("{:.6e}", s.covariance[0][1]),
+            f(odo[0]),
+            f(odo[1]),
+            f(odo_th),
+            f(self.tread_speeds[0]),
+            f(self.tread_speeds[1]),
+            fmt_opt(self.range),
+            fmt_opt(self.innovation),
+            fmt_opt(nis),
+            applied,
+            format!("{:.6}", s.nees),
+        ]
+        .join(",")
+    }
+
+    fn sample(&self) -> Sample {
+        self.sample
+    }
+}
