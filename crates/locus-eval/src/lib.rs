@@ -17,8 +17,9 @@
 
 use std::time::Instant;
 
+use locus_core::Pose;
 use locus_core::chi2;
-use locus_core::nalgebra::{SMatrix, SVector};
+use locus_core::nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 /// The NEES `e^T P^-1 e` of an estimate with error `e` (truth minus
 /// estimate, angles wrapped) and covariance `P` ([`locus_core::nees`]);
@@ -26,6 +27,20 @@ use locus_core::nalgebra::{SMatrix, SVector};
 #[must_use]
 pub fn nees<const N: usize>(error: &SVector<f64, N>, p: &SMatrix<f64, N, N>) -> f64 {
     locus_core::nees(error, p).unwrap_or(f64::NAN)
+}
+
+/// The NEES (3 dof) of a planar estimate `x = [x, y, theta]` (m, m, rad)
+/// with covariance `p` against `truth`: [`nees`] of the error
+/// `truth - x`, heading wrapped ([`Pose::error_to`]).
+#[must_use]
+pub fn planar_nees(x: &Vector3<f64>, p: &Matrix3<f64>, truth: &Pose<f64>) -> f64 {
+    nees(&Pose::from_vector(x).error_to(truth), p)
+}
+
+/// A 3x3 covariance as the row-major array a [`Sample`] and the logs hold.
+#[must_use]
+pub fn matrix3(p: &Matrix3<f64>) -> [[f64; 3]; 3] {
+    core::array::from_fn(|i| core::array::from_fn(|j| p[(i, j)]))
 }
 
 /// The common per-step figures of any scenario.

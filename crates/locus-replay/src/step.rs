@@ -143,12 +143,7 @@ impl Step {
         let x = &self.belief.x;
         let e = Vector3::new(t.x - x[0], t.y - x[1], wrap_angle(t.theta - x[2]));
         let nees = locus_eval::nees(&e, &self.belief.p);
-        let mut covariance = [[0.0; 3]; 3];
-        for (i, row) in covariance.iter_mut().enumerate() {
-            for (j, c) in row.iter_mut().enumerate() {
-                *c = self.belief.p[(i, j)];
-            }
-        }
+        let covariance = locus_eval::matrix3(&self.belief.p);
         let d = &self.dead_reckoning;
         let (measured, correction) = match self.kind {
             EventKind::Odometry { .. } => (false, None),

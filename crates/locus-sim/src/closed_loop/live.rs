@@ -7,8 +7,8 @@ use locus_models::IrPairObservation;
 
 #[cfg(doc)]
 use super::SquareSim;
-use super::record::mat3;
 use super::{SquareConfig, StepRecord};
+use locus_eval::matrix3;
 
 /// Teleoperation of one step: the body twist `(V, W)` (m/s, rad/s) used
 /// instead of the path controller's.
@@ -187,10 +187,10 @@ impl Corrected {
         let g = &first.gain;
         Some(CorrectionDetail {
             x_before_predict: v3(&before.x),
-            p_before_predict: mat3(&before.p),
+            p_before_predict: matrix3(&before.p),
             u,
             x_prior: v3(&prior.x),
-            p_prior: mat3(&prior.p),
+            p_prior: matrix3(&prior.p),
             z: [self.z[0], self.z[1]],
             h: [hx[0], hx[1]],
             jacobian: [
@@ -209,7 +209,7 @@ impl Corrected {
             gate_threshold,
             applied: self.update.applied(),
             x_post: v3(&post.x),
-            p_post: mat3(&post.p),
+            p_post: matrix3(&post.p),
         })
     }
 }

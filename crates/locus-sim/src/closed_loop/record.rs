@@ -1,7 +1,6 @@
 //! What one step of the closed loop logs: [`StepRecord`], its CSV row
 //! (`log.csv` of `locus run`) and its evaluation [`Sample`].
 
-use locus_core::nalgebra::{Matrix3, Vector3};
 use locus_core::wrap_angle;
 
 use crate::robot::Pose;
@@ -137,23 +136,4 @@ impl Record for StepRecord {
             measured: self.ir.is_some(),
         }
     }
-}
-
-/// NEES `e^T P^-1 e` of `x` against `truth` (heading error wrapped); NaN
-/// if `P` is not positive definite.
-pub(super) fn nees(x: &Vector3<f64>, p: &Matrix3<f64>, truth: &Pose<f64>) -> f64 {
-    let e = Vector3::new(
-        truth.x - x[0],
-        truth.y - x[1],
-        wrap_angle(truth.theta - x[2]),
-    );
-    locus_eval::nees(&e, p)
-}
-
-pub(super) fn mat3(p: &Matrix3<f64>) -> [[f64; 3]; 3] {
-    [
-        [p[(0, 0)], p[(0, 1)], p[(0, 2)]],
-        [p[(1, 0)], p[(1, 1)], p[(1, 2)]],
-        [p[(2, 0)], p[(2, 1)], p[(2, 2)]],
-    ]
 }

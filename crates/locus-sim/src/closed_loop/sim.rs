@@ -7,12 +7,12 @@ use locus_models::{IrOutcome, IrPairObservation, Localiser, WheelTravel};
 
 use super::live::Corrected;
 use super::plant::{IrReadings, Plant};
-use super::record::{mat3, nees};
 use super::{Error, LiveParams, NoiseModel, SimStep, SquareConfig, StepRecord, Teleop};
 use crate::robot::Pose;
 use crate::sensors::IrPairSensor;
 use crate::world::World;
 use locus_eval::{Record, Summary, Tally};
+use locus_eval::{matrix3, planar_nees};
 
 /// Width of the simulated decoder's wrapping counters (bits), as in
 /// [`locus_odometry::Counter::paper`].
@@ -309,7 +309,7 @@ impl SquareSim {
             time: self.steps as f64 * self.cfg.dt,
             truth,
             ekf: [x[0], x[1], x[2]],
-            ekf_cov: mat3(&belief.p),
+            ekf_cov: matrix3(&belief.p),
             odometry: [odo[0], odo[1], odo[2]],
             wheel_travel: [u.d1, u.d2],
             ir: reading,
@@ -317,7 +317,7 @@ impl SquareSim {
             nis: first.map(|c| c.nis),
             applied: corrected.is_some_and(|c| c.update.applied()),
             gain: corrected.and_then(Corrected::gain_diagonal),
-            nees: nees(x, &belief.p, &truth),
+            nees: planar_nees(x, &belief.p, &truth),
         }
     }
 }

@@ -209,13 +209,7 @@ pub fn run_tricycle_slip(
                 wrap_angle(truth.theta - x[2]),
             );
             let nees = locus_eval::nees(&e, &belief.p);
-            let p = &belief.p;
-            let mut covariance = [[0.0; 3]; 3];
-            for (i, row) in covariance.iter_mut().enumerate() {
-                for (j, c) in row.iter_mut().enumerate() {
-                    *c = p[(i, j)];
-                }
-            }
+            let covariance = locus_eval::matrix3(&belief.p);
             let sample = Sample {
                 step,
                 time: (step + 1) as f64 * cfg.dt,

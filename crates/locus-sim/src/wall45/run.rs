@@ -73,17 +73,6 @@ fn path(cfg: &Wall45Config) -> Vec<Segment> {
     out
 }
 
-/// NEES `e^T P^-1 e` of `x` against `truth` (heading wrapped); NaN if `P`
-/// is not positive definite.
-fn nees(x: &Vector3<f64>, p: &Matrix3<f64>, truth: &Vector3<f64>) -> f64 {
-    let e = Vector3::new(
-        truth[0] - x[0],
-        truth[1] - x[1],
-        wrap_angle(truth[2] - x[2]),
-    );
-    locus_eval::nees(&e, p)
-}
-
 /// Runs `wall45` with `cfg` from `seed`, calling `sink` with every step's
 /// record as the run goes, and returns the summary (3-dof NEES).
 ///
@@ -244,13 +233,7 @@ pub fn run_wall45(
                 }
             }
 
-            let p = &belief.p;
-            let mut covariance = [[0.0; 3]; 3];
-            for (i, row) in covariance.iter_mut().enumerate() {
-                for (j, c) in row.iter_mut().enumerate() {
-                    *c = p[(i, j)];
-                }
-            }
+            let covariance = locus_eval::matrix3(&belief.p);
             let sample = Sample {
                 step,
                 time: (step + 1) as f64 * cfg.dt,
@@ -262,7 +245,7 @@ pub fn run_wall45(
                 covariance,
                 var_z: 0.0,
                 odometry: Some(([odo.x[0], odo.x[1], 0.0], wrap_angle(true_x[2] - odo.x[2]))),
-                nees: nees(&belief.x, &belief.p, &true_x),
+                nees: locus_eval::planar_nees(&belief.x, &belief.p, &Pose::from_vector(&true_x)),
                 nees_dof: 3,
                 correction,
                 measured: range.is_some(),
