@@ -28,7 +28,7 @@ pub struct Odometer<T> {
     last: Option<[u32; 2]>,
 }
 
-impl<T: Scalar + Real> Odometer<T> {
+impl<T: Real> Odometer<T> {
     /// An odometer for counters `bits` wide (1..=32) on wheels `wheel`,
     /// with no reference yet: the first counts only set it.
     pub fn new(wheel: Wheel<T>, bits: u32) -> Self {
@@ -141,7 +141,7 @@ pub struct LocaliserConfig<T> {
     pub initial_std: [T; 3],
 }
 
-impl<T: Scalar + Real> LocaliserConfig<T> {
+impl<T: Real> LocaliserConfig<T> {
     /// `Ok(())` if every value is in its domain.
     ///
     /// # Errors
@@ -267,7 +267,7 @@ pub struct Localiser<T: Scalar> {
     pub ir: IrAssociation<T>,
 }
 
-impl<T: Scalar + Real> Localiser<T> {
+impl<T: Real> Localiser<T> {
     /// A localiser starting from `belief`.
     pub fn new(
         ekf: Ekf<T>,
