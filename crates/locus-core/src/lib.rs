@@ -12,6 +12,7 @@ pub mod jacobian_check;
 mod linalg;
 pub mod model;
 pub mod pose;
+pub mod robust;
 pub mod running;
 pub mod schedule;
 
@@ -22,6 +23,7 @@ pub use error::{Error, Input};
 pub use gate::ChiSquareGate;
 pub use model::{MeasurementModel, MotionModel};
 pub use pose::Pose;
+pub use robust::{ScaledNoise, StudentT};
 pub use running::{Event, Placement, Recovery, Rules, RunningFilter, Track, Update, nees};
 
 /// Re-export of the linear-algebra crate the core is built on, so that users

@@ -33,7 +33,8 @@ use core::cmp::Ordering;
 use nalgebra::SVector;
 
 use crate::{
-    Belief, ConsistencyMonitor, Correction, Ekf, Error, MeasurementModel, MotionModel, Scalar, cast,
+    Belief, ConsistencyMonitor, Correction, Ekf, Error, MeasurementModel, MotionModel, Scalar,
+    ScaledNoise, StudentT, cast,
 };
 
 /// Recovery from over-confidence: after `after` consecutive gate rejections
@@ -75,6 +76,9 @@ pub struct Rules<T: Scalar> {
     /// Recovery after consecutive gate rejections (`None`: a rejected
     /// measurement is only counted).
     pub recovery: Option<Recovery<T>>,
+    /// Student-t weighting of the corrections the gate lets through
+    /// (`None`: every applied correction has its nominal weight 1).
+    pub robust: Option<StudentT<T>>,
 }
 
 impl<T: Scalar> Rules<T> {
@@ -83,6 +87,7 @@ impl<T: Scalar> Rules<T> {
         Self {
             ekf,
             recovery: None,
+            robust: None,
         }
     }
 
@@ -90,6 +95,14 @@ impl<T: Scalar> Rules<T> {
     #[must_use]
     pub fn with_recovery(mut self, recovery: Recovery<T>) -> Self {
         self.recovery = Some(recovery);
+        self
+    }
+
+    /// The same rules with Student-t weighting of the applied corrections
+    /// (see [`StudentT`]): heavy-tailed noise beside the gate.
+    #[must_use]
+    pub fn with_robust(mut self, robust: StudentT<T>) -> Self {
+        self.robust = Some(robust);
         self
     }
 }
@@ -101,10 +114,15 @@ pub enum Update<T: Scalar, const N: usize, const M: usize> {
     /// belief before an inflation, if the covariance was inflated first
     /// (the measurement was then applied only after recovery).
     Applied {
-        /// The applied correction: NIS, `S`, gain, posterior.
+        /// The applied correction: posterior, `S` and gain as applied (with
+        /// the noise divided by `weight`); its NIS is the one the gate
+        /// tested, against the nominal noise.
         correction: Correction<T, N, M>,
         /// The rejected attempt before the inflation, if any.
         first: Option<Correction<T, N, M>>,
+        /// The weight the correction was applied with, in (0, 1]: 1 without
+        /// [`Rules::robust`].
+        weight: T,
     },
     /// The gate rejected the measurement; the belief is kept (inflated if
     /// `first` is set: the retry after the inflation was rejected too).
@@ -137,9 +155,10 @@ impl<T: Scalar, const N: usize, const M: usize> Update<T, N, M> {
     /// the prior. `None` for [`Update::NoMeasurement`].
     pub fn first_attempt(&self) -> Option<&Correction<T, N, M>> {
         match self {
-            Update::Applied { correction, first } | Update::Gated { correction, first } => {
-                Some(first.as_ref().unwrap_or(correction))
+            Update::Applied {
+                correction, first, ..
             }
+            | Update::Gated { correction, first } => Some(first.as_ref().unwrap_or(correction)),
             Update::NoMeasurement => None,
         }
     }
@@ -253,11 +272,16 @@ impl<T: Scalar, const N: usize, X> Track<T, N, X> {
                 Err(e) => return Err(e),
             };
             if c.applied {
+                let (c, weight) = match rules.robust {
+                    Some(t) => Self::reweigh(rules, &belief, model, z, c, t)?,
+                    None => (c, T::one()),
+                };
                 self.belief = c.belief;
                 self.rejections = 0;
                 return Ok(Update::Applied {
                     correction: c,
                     first,
+                    weight,
                 });
             }
             rejections = rejections.saturating_add(1);
@@ -276,6 +300,39 @@ impl<T: Scalar, const N: usize, X> Track<T, N, X> {
                 }
             }
         }
+    }
+}
+
+impl<T: Scalar, const N: usize, X> Track<T, N, X> {
+    /// The correction `c` (applied at nominal noise to `belief`) redone
+    /// with its Student-t weight, if that is below 1; with the weight. The
+    /// NIS stays the nominal one.
+    fn reweigh<Me, const M: usize>(
+        rules: &Rules<T>,
+        belief: &Belief<T, N>,
+        model: &Me,
+        z: &SVector<T, M>,
+        c: Correction<T, N, M>,
+        t: StudentT<T>,
+    ) -> Result<(Correction<T, N, M>, T), Error>
+    where
+        Me: MeasurementModel<T, N, M>,
+    {
+        let weight = t.weight(c.nis, c.dof);
+        if weight >= T::one() {
+            return Ok((c, weight));
+        }
+        let scaled = ScaledNoise {
+            inner: model,
+            factor: T::one() / weight,
+        };
+        let ekf = Ekf {
+            gate: None,
+            ..rules.ekf
+        };
+        let mut w = ekf.correct(belief, &scaled, z)?;
+        w.nis = c.nis;
+        Ok((w, weight))
     }
 }
 

@@ -3,6 +3,8 @@
 #![forbid(unsafe_code)]
 
 pub mod association;
+pub mod calibrated_range_bearing;
+pub mod calibrated_unicycle;
 pub mod camera;
 pub mod diff_drive;
 pub mod ir_wall;
