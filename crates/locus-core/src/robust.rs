@@ -110,7 +110,7 @@ mod tests {
 
     #[test]
     fn weight_is_one_for_agreeing_measurements_and_falls_with_the_nis() {
-        let t = StudentT::new(4.0).unwrap();
+        let t = StudentT::new(4.0_f64).unwrap();
         assert_eq!(t.weight(0.0, 2), 1.0);
         assert_eq!(t.weight(2.0, 2), 1.0);
         assert!((t.weight(8.0, 2) - 0.5).abs() < 1e-15);
@@ -120,8 +120,8 @@ mod tests {
 
     #[test]
     fn rejects_bad_degrees_of_freedom() {
-        assert!(StudentT::new(0.0).is_err());
-        assert!(StudentT::new(-1.0).is_err());
+        assert!(StudentT::new(0.0_f64).is_err());
+        assert!(StudentT::new(-1.0_f64).is_err());
         assert!(StudentT::new(f64::NAN).is_err());
         assert!(StudentT::new(f64::INFINITY).is_err());
     }

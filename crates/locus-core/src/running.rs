@@ -77,7 +77,8 @@ pub struct Rules<T: Scalar> {
     /// measurement is only counted).
     pub recovery: Option<Recovery<T>>,
     /// Student-t weighting of the corrections the gate lets through
-    /// (`None`: every applied correction has its nominal weight 1).
+    /// (`None`: every applied correction has its nominal weight 1). A
+    /// correction applied after a [`Recovery`] inflation keeps weight 1.
     pub robust: Option<StudentT<T>>,
 }
 
@@ -272,9 +273,11 @@ impl<T: Scalar, const N: usize, X> Track<T, N, X> {
                 Err(e) => return Err(e),
             };
             if c.applied {
+                // After a recovery the prior, not the measurement, is what
+                // was wrong: the retry is applied at its nominal weight.
                 let (c, weight) = match rules.robust {
-                    Some(t) => Self::reweigh(rules, &belief, model, z, c, t)?,
-                    None => (c, T::one()),
+                    Some(t) if first.is_none() => Self::reweigh(rules, &belief, model, z, c, t)?,
+                    _ => (c, T::one()),
                 };
                 self.belief = c.belief;
                 self.rejections = 0;

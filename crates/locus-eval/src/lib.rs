@@ -132,6 +132,10 @@ pub struct Summary {
     /// Share of steps whose NEES lies in the two-sided 95 % chi-square
     /// interval of `nees_dof` (0.95 for a consistent filter).
     pub nees_in_interval: f64,
+    /// Share of steps whose error lies within 3 standard deviations of the
+    /// filter's own covariance, per component: x, y, heading (0.997 each
+    /// for a consistent Gaussian filter).
+    pub within_3_sigma: [f64; 3],
     /// Steps where a measurement arrived.
     pub readings: usize,
     /// Measurements that reached the filter (associated; the others were
@@ -175,6 +179,7 @@ pub struct Tally {
     odo_max_pos: f64,
     nees_sum: f64,
     nees_in: usize,
+    within_3_sigma: [usize; 3],
     nees_dof: u32,
     nees_bounds: (f64, f64),
     readings: usize,
@@ -202,6 +207,7 @@ impl Tally {
             odo_max_pos: 0.0,
             nees_sum: 0.0,
             nees_in: 0,
+            within_3_sigma: [0; 3],
             nees_dof,
             nees_bounds: (
                 chi2::quantile(0.025, nees_dof)?,
@@ -231,6 +237,17 @@ impl Tally {
         self.nees_sum += s.nees;
         if (self.nees_bounds.0..=self.nees_bounds.1).contains(&s.nees) {
             self.nees_in += 1;
+        }
+        let errors = [
+            s.truth[0] - s.estimate[0],
+            s.truth[1] - s.estimate[1],
+            s.heading_error,
+        ];
+        let variances = [s.covariance[0][0], s.covariance[1][1], s.covariance[2][2]];
+        for ((count, e), v) in self.within_3_sigma.iter_mut().zip(errors).zip(variances) {
+            if e * e <= 9.0 * v {
+                *count += 1;
+            }
         }
         self.readings += usize::from(s.measured);
         if let Some((_, _, applied)) = s.correction {
@@ -268,6 +285,7 @@ impl Tally {
             mean_nees: self.nees_sum / n,
             nees_dof: self.nees_dof,
             nees_in_interval: self.nees_in as f64 / n,
+            within_3_sigma: self.within_3_sigma.map(|c| c as f64 / n),
             readings: self.readings,
             associated: self.associated,
             corrections: self.corrections,

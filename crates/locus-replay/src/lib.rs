@@ -42,19 +42,22 @@
 mod config;
 pub mod log;
 mod report;
+mod smoother;
 mod step;
 
-use locus_core::nalgebra::{Matrix3, Vector2, Vector3};
+use locus_core::nalgebra::{SMatrix, SVector, Vector2, Vector3};
 use locus_core::{
-    Belief, ChiSquareGate, Ekf, MotionModel, Recovery, Rules, RunningFilter, Track, Update,
-    wrap_angle,
+    Belief, ChiSquareGate, Ekf, MotionModel, Recovery, Rules, RunningFilter, StudentT, Track,
+    Update, wrap_angle,
 };
 use locus_eval::Tally;
 use locus_logs::mrclam::Odometry;
+use locus_models::calibrated_range_bearing::CalibratedRangeBearing;
+use locus_models::calibrated_unicycle::{BEARING_BIAS, OMEGA_BIAS, OMEGA_SCALE, V_SCALE};
 use locus_models::range_bearing::RangeBearing;
 use locus_models::unicycle::{Unicycle, Velocities};
 
-pub use config::Config;
+pub use config::{Calibration, Config};
 pub use log::{Landmark, Log, Sighting};
 pub use report::Report;
 pub use step::{EventKind, SightingOutcome, Step};
@@ -98,6 +101,13 @@ pub enum Error {
     /// A configuration value is out of its valid range.
     #[error("invalid configuration: {0}")]
     InvalidConfig(&'static str),
+    /// The smoother's backward pass failed (a prediction that fails or a
+    /// predicted covariance that is not positive definite).
+    #[error("smoother: prediction failed or not positive definite at {time} s")]
+    Smoother {
+        /// The event's time, s.
+        time: f64,
+    },
     /// The filter failed (non-finite input, ...).
     #[error("filter step at {time} s")]
     Filter {
@@ -154,6 +164,15 @@ struct Carried {
     dead: Vector3<f64>,
 }
 
+/// Dimension of the replay's state: the pose and the calibration of
+/// [`CalibratedUnicycle`].
+pub const STATE: usize = 7;
+
+/// The replay's state vector and covariance.
+pub type StateVector = SVector<f64, STATE>;
+/// A covariance of the replay's state.
+pub type StateMatrix = SMatrix<f64, STATE, STATE>;
+
 /// An event in the running filter's history, with what applying it did.
 #[derive(Debug, Clone, Copy)]
 struct Entry {
@@ -180,8 +199,8 @@ impl locus_core::Event for Entry {
 /// final early.
 const HISTORY: usize = 1024;
 
-type Filter = RunningFilter<f64, 3, HISTORY, Entry, Carried>;
-type State = Track<f64, 3, Carried>;
+type Filter = RunningFilter<f64, STATE, HISTORY, Entry, Carried>;
+type State = Track<f64, STATE, Carried>;
 
 /// Advances `track` to `entry`'s time and applies it (the running filter's
 /// `apply`; deterministic, as a re-run needs).
@@ -195,7 +214,7 @@ fn apply(
     let t = entry.event.time();
     let dt = t - track.time;
     if dt > 0.0 {
-        let model = Unicycle::new(cfg.q_v / dt, cfg.q_omega / dt);
+        let model = cfg.motion_model();
         let c = track.extra;
         let u = Velocities {
             v: c.v,
@@ -203,35 +222,43 @@ fn apply(
             dt,
         };
         track.predict(&rules.ekf, &model, &u)?;
-        track.extra.dead = model.f(&c.dead, &u, &Vector2::zeros());
+        track.extra.dead = Unicycle::new(0.0, 0.0).f(&c.dead, &u, &Vector2::zeros());
         track.time = t;
     }
     entry.inflations = 0;
     entry.nll = 0.0;
     entry.outcome = match entry.event {
         Event::Odometry(o) => {
-            track.extra.v = o.v * cfg.v_scale;
-            track.extra.omega = o.omega * cfg.omega_scale;
+            track.extra.v = o.v;
+            track.extra.omega = o.omega;
             None
         }
         Event::Sighting(z) => Some(match log.landmark(z.landmark) {
             None => SightingOutcome::NotInMap,
             Some(l) => {
-                let model = RangeBearing::new(
-                    Vector2::new(l.x, l.y),
-                    Vector2::zeros(),
-                    cfg.sigma_range,
-                    cfg.sigma_bearing,
-                );
+                let model = CalibratedRangeBearing {
+                    inner: RangeBearing::new(
+                        Vector2::new(l.x, l.y),
+                        Vector2::new(cfg.sensor[0], cfg.sensor[1]),
+                        cfg.sigma_range,
+                        cfg.sigma_bearing,
+                    ),
+                    yaw: cfg.sensor[2],
+                };
                 let update = track.correct(rules, &model, &Vector2::new(z.range, z.bearing))?;
                 if let Some(first) = update.first_attempt() {
                     entry.nll = 0.5 * first.s.determinant().ln() + 0.5 * first.nis.min(NIS_CAP);
                 }
                 entry.inflations = u32::from(update.inflated());
                 match update {
-                    Update::Applied { correction, first } => SightingOutcome::Applied {
+                    Update::Applied {
+                        correction,
+                        first,
+                        weight,
+                    } => SightingOutcome::Applied {
                         nis: correction.nis,
                         recovered: first.is_some(),
+                        weight,
                     },
                     Update::Gated { correction, .. } => SightingOutcome::Gated {
                         nis: correction.nis,
@@ -244,6 +271,20 @@ fn apply(
     Ok(())
 }
 
+/// The pose part of a belief of the replay's state.
+fn pose_belief(b: &Belief<f64, STATE>) -> Belief<f64, 3> {
+    Belief::new(
+        b.x.fixed_rows::<3>(0).into_owned(),
+        b.p.fixed_view::<3, 3>(0, 0).into_owned(),
+    )
+}
+
+/// The calibration part of a belief: `(mean, standard deviation)` of `s_v`,
+/// `s_omega`, `b_omega` (rad/s) and `b_bearing` (rad).
+fn calibration_of(b: &Belief<f64, STATE>) -> [(f64, f64); 4] {
+    [V_SCALE, OMEGA_SCALE, OMEGA_BIAS, BEARING_BIAS].map(|i| (b.x[i], b.p[(i, i)].sqrt()))
+}
+
 /// The replay engine: the running filter and what the report needs.
 struct Engine<'a, F: FnMut(&Step)> {
     cfg: Config,
@@ -253,6 +294,9 @@ struct Engine<'a, F: FnMut(&Step)> {
     next_index: usize,
     tally: Tally,
     report: Report,
+    /// With [`Config::smooth`]: the final steps and what the smoother
+    /// needs, until the backward pass.
+    held: Vec<(Step, smoother::Node)>,
     sink: F,
 }
 
@@ -301,9 +345,12 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
                 let r = &mut self.report;
                 r.sightings += 1;
                 match outcome {
-                    SightingOutcome::Applied { recovered, .. } => {
+                    SightingOutcome::Applied {
+                        recovered, weight, ..
+                    } => {
                         r.applied += 1;
                         r.recovered += usize::from(recovered);
+                        r.down_weighted += usize::from(weight < 1.0);
                     }
                     SightingOutcome::Gated { .. } => r.gated += 1,
                     SightingOutcome::NotInMap => r.not_in_map += 1,
@@ -321,7 +368,9 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             time,
             elapsed: time - self.t0,
             kind,
-            belief: after.belief,
+            belief: pose_belief(&after.belief),
+            calibration: calibration_of(&after.belief).map(|c| c.0),
+            smoothed: None,
             dead_reckoning: [d[0], d[1], d[2]],
             truth: self.log.truth.pose_at(time, self.cfg.truth_max_gap),
         };
@@ -331,12 +380,54 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             self.report.compared += 1;
             self.tally.push(&sample);
         }
-        (self.sink)(&step);
+        if self.cfg.smooth {
+            self.held.push((
+                step,
+                smoother::Node {
+                    posterior: after.belief,
+                    time,
+                    v: after.extra.v,
+                    omega: after.extra.omega,
+                },
+            ));
+        } else {
+            (self.sink)(&step);
+        }
+    }
+
+    /// With [`Config::smooth`]: the backward pass over the held steps, then
+    /// each step to the sink with its smoothed estimate.
+    fn smooth_and_flush(&mut self) -> Result<(), Error> {
+        if !self.cfg.smooth {
+            return Ok(());
+        }
+        let nodes: Vec<smoother::Node> = self.held.iter().map(|h| h.1).collect();
+        let smoothed =
+            smoother::rts(&self.cfg.motion_model(), &nodes).map_err(|index| Error::Smoother {
+                time: self.held[index].0.time,
+            })?;
+        let mut tally =
+            Tally::new(3).map_err(|_| Error::InvalidConfig("NEES degrees of freedom"))?;
+        for ((step, _), s) in self.held.iter_mut().zip(&smoothed) {
+            let pose = pose_belief(s);
+            step.smoothed = Some(pose);
+            if let Some(sample) = step.sample_of(&pose) {
+                tally.push(&sample);
+            }
+            (self.sink)(step);
+        }
+        self.report.smoothed = Some(tally.summary(0));
+        if let Some(last) = smoothed.first() {
+            self.report.smoothed_calibration = Some(calibration_of(last));
+        }
+        self.held = Vec::new();
+        Ok(())
     }
 }
 
 /// Replays `log` with `cfg`, handing each step (in canonical time order,
-/// with its final estimate) to `sink`.
+/// with its final estimate, and with [`Config::smooth`] its smoothed one)
+/// to `sink`.
 ///
 /// # Errors
 /// An invalid configuration, a log with no odometry or no initial pose,
@@ -369,11 +460,28 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
         }
         previous = s.arrival;
     }
-    let x = Vector3::new(start.x, start.y, wrap_angle(start.theta));
+    let pose = Vector3::new(start.x, start.y, wrap_angle(start.theta));
+    let mut x = StateVector::zeros();
+    x[0] = pose[0];
+    x[1] = pose[1];
+    x[2] = pose[2];
+    x[V_SCALE] = cfg.calibration.initial[0];
+    x[OMEGA_SCALE] = cfg.calibration.initial[1];
+    x[OMEGA_BIAS] = cfg.calibration.initial[2];
+    x[BEARING_BIAS] = cfg.calibration.initial[3];
     let [sx, sy, st] = cfg.initial_std;
+    let [cv, cw, cb, cz] = cfg.calibration.std;
     let belief = Belief::new(
         x,
-        Matrix3::from_diagonal(&Vector3::new(sx * sx, sy * sy, st * st)),
+        StateMatrix::from_diagonal(&StateVector::from([
+            sx * sx,
+            sy * sy,
+            st * st,
+            cv * cv,
+            cw * cw,
+            cb * cb,
+            cz * cz,
+        ])),
     );
     let mut ekf = Ekf::default();
     if let Some(g) = cfg.gate {
@@ -382,6 +490,12 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
     }
     let recovery = Recovery::new(cfg.recover_after, cfg.inflation)
         .map_err(|_| Error::InvalidConfig("recovery"))?;
+    let mut rules = Rules::new(ekf).with_recovery(recovery);
+    if let Some(dof) = cfg.robust_dof {
+        rules = rules.with_robust(
+            StudentT::new(dof).map_err(|_| Error::InvalidConfig("robust degrees of freedom"))?,
+        );
+    }
     let tally = Tally::new(3).map_err(|_| Error::InvalidConfig("NEES degrees of freedom"))?;
     let start = Track::new(
         belief,
@@ -389,25 +503,27 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
         Carried {
             v: 0.0,
             omega: 0.0,
-            dead: x,
+            dead: pose,
         },
     );
     let mut engine = Engine {
         cfg: *cfg,
         log,
         t0,
-        filter: Box::new(Filter::new(Rules::new(ekf).with_recovery(recovery), start)),
+        filter: Box::new(Filter::new(rules, start)),
         next_index: 0,
         tally,
         report: Report {
             summary: Tally::new(3)
                 .map_err(|_| Error::InvalidConfig("NEES degrees of freedom"))?
                 .summary(0),
+            smoothed: None,
             steps: 0,
             compared: 0,
             odometry: 0,
             sightings: 0,
             applied: 0,
+            down_weighted: 0,
             gated: 0,
             inflations: 0,
             recovered: 0,
@@ -418,8 +534,11 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
             late: 0,
             too_late: 0,
             innovation_nll: 0.0,
-            final_belief: belief,
+            final_belief: pose_belief(&belief),
+            calibration: calibration_of(&belief),
+            smoothed_calibration: None,
         },
+        held: Vec::new(),
         sink,
     };
     let mut odometry = log.odometry.iter().peekable();
@@ -450,7 +569,10 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
         }
     }
     engine.finalise_before(f64::INFINITY);
-    engine.report.final_belief = engine.filter.base().belief;
+    let last = engine.filter.base().belief;
+    engine.report.final_belief = pose_belief(&last);
+    engine.report.calibration = calibration_of(&last);
     engine.report.summary = engine.tally.summary(0);
+    engine.smooth_and_flush()?;
     Ok(engine.report)
 }

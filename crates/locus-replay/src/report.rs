@@ -11,6 +11,9 @@ pub struct Report {
     /// `associated` those that reached the filter, `corrections` those
     /// applied.
     pub summary: Summary,
+    /// The smoother's figures against the ground truth (with
+    /// [`Config::smooth`](crate::Config::smooth)).
+    pub smoothed: Option<Summary>,
     /// Events replayed (odometry records + landmark sightings).
     pub steps: usize,
     /// Events compared with ground truth.
@@ -21,6 +24,9 @@ pub struct Report {
     pub sightings: usize,
     /// Sightings applied (including after recovery).
     pub applied: usize,
+    /// Applied sightings whose Student-t weight was below 1 (their noise
+    /// inflated as outliers-to-be).
+    pub down_weighted: usize,
     /// Sightings rejected by the gate.
     pub gated: usize,
     /// Covariance inflations (recoveries: at each, the sighting was retried).
@@ -47,8 +53,15 @@ pub struct Report {
     /// and the NIS against the belief before the sighting. The objective
     /// `locus tune` minimises; the cap keeps gross outliers from dominating.
     pub innovation_nll: f64,
-    /// The final belief.
+    /// The final belief of the pose.
     pub final_belief: Belief<f64, 3>,
+    /// The filter's final calibration, `(mean, standard deviation)` of the
+    /// forward-speed scale, turn-rate scale, turn-rate bias (rad/s) and
+    /// bearing bias (rad).
+    pub calibration: [(f64, f64); 4],
+    /// The smoother's calibration at the first event (the estimate from the
+    /// whole log), with [`Config::smooth`](crate::Config::smooth).
+    pub smoothed_calibration: Option<[(f64, f64); 4]>,
 }
 
 impl Report {

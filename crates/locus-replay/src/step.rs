@@ -14,10 +14,12 @@ pub enum SightingOutcome {
     /// Corrected the belief (NIS of the applied correction; `recovered`:
     /// applied only after the covariance was inflated).
     Applied {
-        /// NIS of the correction (2 dof).
+        /// NIS of the correction (2 dof), against the nominal noise.
         nis: f64,
         /// Whether the covariance was inflated before it was applied.
         recovered: bool,
+        /// The Student-t weight it was applied with, in (0, 1].
+        weight: f64,
     },
     /// Rejected by the gate (NIS against the belief it was tried on).
     Gated {
@@ -60,8 +62,13 @@ pub struct Step {
     pub elapsed: f64,
     /// The event.
     pub kind: EventKind,
-    /// The belief after the event.
+    /// The belief of the pose after the event.
     pub belief: Belief<f64, 3>,
+    /// The filter's calibration after the event: forward-speed scale,
+    /// turn-rate scale, turn-rate bias (rad/s), bearing bias (rad).
+    pub calibration: [f64; 4],
+    /// The smoothed belief of the pose (with `Config::smooth`).
+    pub smoothed: Option<Belief<f64, 3>>,
     /// Dead reckoning (odometry alone) `[x, y, theta]` at this time.
     pub dead_reckoning: [f64; 3],
     /// Ground truth interpolated at this time, if covered.
@@ -91,7 +98,7 @@ impl Step {
             ),
             EventKind::Sighting { sighting, outcome } => {
                 let (nis, applied) = match outcome {
-                    SightingOutcome::Applied { nis, recovered } => {
+                    SightingOutcome::Applied { nis, recovered, .. } => {
                         (nis.to_string(), if recovered { "recovered" } else { "1" })
                     }
                     SightingOutcome::Gated { nis } => (nis.to_string(), "0"),
@@ -139,11 +146,18 @@ impl Step {
     /// ground truth to compare with (NEES against it, 3 dof).
     #[must_use]
     pub fn sample(&self) -> Option<Sample> {
+        self.sample_of(&self.belief)
+    }
+
+    /// As [`Step::sample`], for another estimate of this step's pose (the
+    /// smoothed one).
+    #[must_use]
+    pub fn sample_of(&self, belief: &Belief<f64, 3>) -> Option<Sample> {
         let t = self.truth?;
-        let x = &self.belief.x;
+        let x = &belief.x;
         let e = Vector3::new(t.x - x[0], t.y - x[1], wrap_angle(t.theta - x[2]));
-        let nees = locus_eval::nees(&e, &self.belief.p);
-        let covariance = locus_eval::matrix3(&self.belief.p);
+        let nees = locus_eval::nees(&e, &belief.p);
+        let covariance = locus_eval::matrix3(&belief.p);
         let d = &self.dead_reckoning;
         let (measured, correction) = match self.kind {
             EventKind::Odometry { .. } => (false, None),

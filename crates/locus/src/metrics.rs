@@ -185,6 +185,7 @@ mod tests {
             mean_nees: 3.0,
             nees_dof: 3,
             nees_in_interval: 1.0,
+            within_3_sigma: [1.0, 1.0, f64::NAN],
             readings: 2,
             associated: 2,
             corrections: 1,

@@ -69,7 +69,7 @@ struct Common {
     #[arg(long)]
     out: Option<PathBuf>,
     /// Chi-square gate confidence in (0, 1).
-    #[arg(long, default_value_t = 0.999)]
+    #[arg(long, default_value_t = Config::default().gate.unwrap_or(0.99))]
     gate: f64,
     /// No gate: apply every sighting.
     #[arg(long)]
@@ -86,12 +86,26 @@ struct Common {
     /// Bearing noise standard deviation, rad.
     #[arg(long, default_value_t = Config::default().sigma_bearing)]
     sigma_bearing: f64,
-    /// Scale factor on the logged forward speed.
+    /// Initial value of the forward-speed scale factor (a state the filter
+    /// estimates: the logged speed times it is the robot's).
     #[arg(long, default_value_t = 1.0)]
     v_scale: f64,
-    /// Scale factor on the logged turn rate.
+    /// Initial value of the turn-rate scale factor (estimated, as
+    /// `--v-scale`).
     #[arg(long, default_value_t = 1.0)]
     omega_scale: f64,
+    /// Student-t degrees of freedom of the sightings' noise: sightings far
+    /// from the prediction are down-weighted rather than only gated.
+    #[arg(long, default_value_t = 4.0)]
+    robust_dof: f64,
+    /// Gaussian sightings: no Student-t weighting (the gate alone).
+    #[arg(long)]
+    no_robust: bool,
+    /// Also run the Rauch-Tung-Striebel smoother over the whole log: its
+    /// figures beside the filter's, its estimate in log.csv's `smooth_*`
+    /// columns.
+    #[arg(long)]
+    smooth: bool,
     /// Pictures.
     #[command(flatten)]
     pictures: PictureArgs,
@@ -104,9 +118,13 @@ impl Common {
             q_omega: self.q_omega,
             sigma_range: self.sigma_range,
             sigma_bearing: self.sigma_bearing,
-            v_scale: self.v_scale,
-            omega_scale: self.omega_scale,
             gate: (!self.no_gate).then_some(self.gate),
+            robust_dof: (!self.no_robust).then_some(self.robust_dof),
+            smooth: self.smooth,
+            calibration: locus_replay::Calibration {
+                initial: [self.v_scale, self.omega_scale, 0.0, 0.0],
+                ..locus_replay::Calibration::default()
+            },
             ..Config::default()
         }
     }
@@ -244,9 +262,93 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path) -> Result<()> {
         report.compared
     );
     text.push_str(&crate::table::summary(&info, &report.summary));
+    text.push_str(&format!("{}\n", honesty_table(&report)));
+    text.push_str(&format!("{}\n", calibration_table(&report)));
     text.push_str(&format!("{}\n", counts_table(cfg, &report)));
     text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
     print_out(&text)
+}
+
+/// A share as a percentage, or "n/a" when it could not be computed.
+fn percent(v: f64) -> String {
+    if v.is_finite() {
+        format!("{:.1}", 100.0 * v)
+    } else {
+        "n/a".to_string()
+    }
+}
+
+fn figure(v: f64, decimals: usize) -> String {
+    if v.is_finite() {
+        format!("{v:.decimals$}")
+    } else {
+        "n/a".to_string()
+    }
+}
+
+/// Accuracy and honesty of the filter (and the smoother): RMSE, and the
+/// share of steps whose error lies inside the estimate's own 3 sigma.
+fn honesty_table(r: &Report) -> Table {
+    let mut t = with_header([
+        "estimate",
+        "position RMSE [m]",
+        "heading RMSE [rad]",
+        "inside 3 sigma x / y / theta [%]",
+        "mean NEES [-] (3 if honest)",
+    ]);
+    let mut rows = vec![("filter", r.summary)];
+    if let Some(s) = r.smoothed {
+        rows.push(("smoother", s));
+    }
+    for (name, s) in rows {
+        let shares = if s.steps == 0 {
+            "n/a".to_string()
+        } else {
+            s.within_3_sigma
+                .iter()
+                .map(|v| percent(*v))
+                .collect::<Vec<_>>()
+                .join(" / ")
+        };
+        let (rmse, heading, nees) = if s.steps == 0 {
+            (f64::NAN, f64::NAN, f64::NAN)
+        } else {
+            (s.ekf_position_rmse, s.ekf_heading_rmse, s.mean_nees)
+        };
+        t.add_row(vec![
+            name.to_string(),
+            figure(rmse, 3),
+            figure(heading, 3),
+            shares,
+            figure(nees, 2),
+        ]);
+    }
+    t
+}
+
+/// The calibration the filter estimated (and the smoother, from the whole
+/// log).
+fn calibration_table(r: &Report) -> Table {
+    let mut t = with_header(["calibration [unit]", "filter (end)", "smoother (whole log)"]);
+    let names = [
+        "forward-speed scale [-]",
+        "turn-rate scale [-]",
+        "turn-rate bias [rad/s]",
+        "bearing bias [rad]",
+    ];
+    for (i, name) in names.iter().enumerate() {
+        let (m, s) = r.calibration[i];
+        let smoothed = r.smoothed_calibration.map_or_else(
+            || "-".to_string(),
+            |c| format!("{:.4} +- {:.4}", c[i].0, c[i].1),
+        );
+        t.add_row(vec![
+            (*name).to_string(),
+            format!("{m:.4} +- {s:.4}"),
+            smoothed,
+        ]);
+    }
+    t
 }
 
 /// The replay's own counts: what happened to the sightings.
@@ -264,6 +366,10 @@ fn counts_table(cfg: &Config, r: &Report) -> Table {
         (
             "sightings applied / gated [count]",
             format!("{} / {}", r.applied, r.gated),
+        ),
+        (
+            "applied with a Student-t weight below 1 [count]",
+            format!("{}", r.down_weighted),
         ),
         (
             "share of sightings gated [%]",
@@ -303,8 +409,11 @@ struct ReplayMetrics {
     q_omega_rad2_per_s: f64,
     sigma_range_m: f64,
     sigma_bearing_rad: f64,
-    v_scale: f64,
-    omega_scale: f64,
+    /// The filter's final `(mean, std)` of the forward-speed scale, the
+    /// turn-rate scale, the turn-rate bias (rad/s), the bearing bias (rad).
+    calibration: [(f64, f64); 4],
+    /// The smoother's summary (with `--smooth`).
+    smoothed: Option<locus_eval::Summary>,
     events: usize,
     compared: usize,
     sightings: usize,
@@ -328,8 +437,8 @@ impl ReplayMetrics {
             q_omega_rad2_per_s: cfg.q_omega,
             sigma_range_m: cfg.sigma_range,
             sigma_bearing_rad: cfg.sigma_bearing,
-            v_scale: cfg.v_scale,
-            omega_scale: cfg.omega_scale,
+            calibration: r.calibration,
+            smoothed: r.smoothed,
             events: r.steps,
             compared: r.compared,
             sightings: r.sightings,

@@ -60,21 +60,22 @@ fn to_params(c: &Config) -> Vec<f64> {
         c.q_omega.ln(),
         c.sigma_range.ln(),
         c.sigma_bearing.ln(),
-        c.v_scale,
-        c.omega_scale,
+        c.calibration.initial[0],
+        c.calibration.initial[1],
     ]
 }
 
 fn from_params(p: &[f64]) -> Config {
-    Config {
+    let mut c = Config {
         q_v: p[0].exp(),
         q_omega: p[1].exp(),
         sigma_range: p[2].exp(),
         sigma_bearing: p[3].exp(),
-        v_scale: p[4],
-        omega_scale: p[5],
         ..Config::default()
-    }
+    };
+    c.calibration.initial[0] = p[4];
+    c.calibration.initial[1] = p[5];
+    c
 }
 
 /// The objective: summed innovation NLL over the tuning logs.
@@ -183,8 +184,16 @@ pub fn run(args: &Args) -> Result<()> {
             start.sigma_bearing,
             tuned.sigma_bearing,
         ),
-        ("v scale [-]", start.v_scale, tuned.v_scale),
-        ("omega scale [-]", start.omega_scale, tuned.omega_scale),
+        (
+            "initial v scale [-]",
+            start.calibration.initial[0],
+            tuned.calibration.initial[0],
+        ),
+        (
+            "initial omega scale [-]",
+            start.calibration.initial[1],
+            tuned.calibration.initial[1],
+        ),
     ];
     for (k, a, b) in rows {
         values.add_row(vec![k.to_string(), format!("{a:.5}"), format!("{b:.5}")]);

@@ -1,0 +1,168 @@
+//! The extended Rauch-Tung-Striebel smoother over the replay's forward pass
+//! (Rauch, Tung and Striebel, "Maximum likelihood estimates of linear
+//! dynamic systems", AIAA Journal 3(8), 1965; extended form as in Sarkka,
+//! "Bayesian Filtering and Smoothing", 2013, algorithm 9.3).
+//!
+//! For events `k = 0 .. n-1` with filtered beliefs `(x_k, P_k)`, and the
+//! prediction to event `k+1` (prior `(x-_{k+1}, P-_{k+1})`, Jacobian
+//! `F_{k+1}`), going backwards from `(xs_{n-1}, Ps_{n-1}) = (x_{n-1},
+//! P_{n-1})`:
+//!
+//! `C_k = P_k F_{k+1}^T (P-_{k+1})^-1`,
+//! `xs_k = x_k + C_k (xs_{k+1} - x-_{k+1})`,
+//! `Ps_k = P_k + C_k (Ps_{k+1} - P-_{k+1}) C_k^T`.
+//!
+//! Angles (heading, bearing bias) are differenced on the circle and the
+//! result wrapped.
+
+use locus_core::nalgebra::Cholesky;
+use locus_core::{Belief, Ekf, MotionModel, wrap_angle};
+use locus_models::calibrated_unicycle::{BEARING_BIAS, CalibratedUnicycle};
+use locus_models::unicycle::Velocities;
+
+use crate::{STATE, StateMatrix, StateVector};
+
+/// What the backward pass needs of one event of the forward pass: the
+/// prediction from one event to the next is recomputed from these, with the
+/// same model and the same operations as the forward pass, so it is the
+/// forward pass's to the bit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Node {
+    /// The belief after the event.
+    pub posterior: Belief<f64, STATE>,
+    /// The event's time, s.
+    pub time: f64,
+    /// The forward speed in force after the event (as logged), m/s.
+    pub v: f64,
+    /// The turn rate in force after the event (as logged), rad/s.
+    pub omega: f64,
+}
+
+/// The prior at `next` predicted from `here`, and the prediction's
+/// Jacobian (`None` if the prediction fails).
+fn prediction(
+    model: &CalibratedUnicycle<f64>,
+    here: &Node,
+    next: &Node,
+) -> Option<(Belief<f64, STATE>, StateMatrix)> {
+    let dt = next.time - here.time;
+    if dt > 0.0 {
+        let u = Velocities {
+            v: here.v,
+            omega: here.omega,
+            dt,
+        };
+        let prior = Ekf::default().predict(&here.posterior, model, &u).ok()?;
+        Some((prior, model.jacobian_state(&here.posterior.x, &u)))
+    } else {
+        Some((here.posterior, StateMatrix::identity()))
+    }
+}
+
+fn wrap_angles(mut v: StateVector) -> StateVector {
+    v[2] = wrap_angle(v[2]);
+    v[BEARING_BIAS] = wrap_angle(v[BEARING_BIAS]);
+    v
+}
+
+/// The smoothed beliefs of `nodes` (same order).
+///
+/// # Errors
+/// The index of the event whose predicted covariance is not positive
+/// definite.
+pub(crate) fn rts(
+    model: &CalibratedUnicycle<f64>,
+    nodes: &[Node],
+) -> Result<Vec<Belief<f64, STATE>>, usize> {
+    let Some(last) = nodes.last() else {
+        return Ok(Vec::new());
+    };
+    let mut out = vec![last.posterior; nodes.len()];
+    for k in (0..nodes.len() - 1).rev() {
+        let (prior, jacobian) = prediction(model, &nodes[k], &nodes[k + 1]).ok_or(k + 1)?;
+        let here = &nodes[k].posterior;
+        // C = P F^T (P-)^-1, as the solution of P- C^T = F P.
+        let chol = Cholesky::new(prior.p).ok_or(k + 1)?;
+        let c = chol.solve(&(jacobian * here.p)).transpose();
+        let ahead = out[k + 1];
+        let dx = wrap_angles(ahead.x - prior.x);
+        let x = wrap_angles(here.x + c * dx);
+        let p = here.p + c * (ahead.p - prior.p) * c.transpose();
+        out[k] = Belief::new(x, (p + p.transpose()) * 0.5);
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The robot standing still, heading 0: its x is a random walk of
+    /// variance `psd_v` per second, independent of the other states. Seen
+    /// directly each second, the smoother's x at each step must equal the
+    /// batch least-squares estimate over all measurements (computed
+    /// independently, in information form).
+    #[test]
+    fn matches_the_batch_solution_of_a_random_walk() {
+        let (q, r, p0) = (0.3, 0.5, 2.0);
+        let model = CalibratedUnicycle {
+            psd_v: q,
+            psd_omega: 0.1,
+            walk: [1e-3; 4],
+        };
+        let z = [1.0, 1.4, 0.7, 2.0, 1.1, 0.4];
+        let n = z.len();
+        let mut nodes: Vec<Node> = Vec::new();
+        let mut belief = Belief::new(StateVector::zeros(), StateMatrix::identity());
+        belief.x[3] = 1.0;
+        belief.x[4] = 1.0;
+        belief.p[(0, 0)] = p0;
+        for (k, zk) in z.iter().enumerate() {
+            if let Some(prev) = nodes.last() {
+                let u = Velocities {
+                    v: 0.0,
+                    omega: 0.0,
+                    dt: 1.0,
+                };
+                assert_eq!(prev.time + 1.0, k as f64);
+                belief = Ekf::default().predict(&prev.posterior, &model, &u).unwrap();
+            }
+            let (xp, pp) = (belief.x[0], belief.p[(0, 0)]);
+            let g = pp / (pp + r);
+            belief.x[0] = xp + g * (zk - xp);
+            belief.p[(0, 0)] = (1.0 - g) * pp;
+            nodes.push(Node {
+                posterior: belief,
+                time: k as f64,
+                v: 0.0,
+                omega: 0.0,
+            });
+        }
+        let s = rts(&model, &nodes).unwrap();
+        // Batch: minimise x0^2/p0 + sum (z_k - x_k)^2/r + sum (x_k - x_{k-1})^2/q.
+        let mut a = locus_core::nalgebra::SMatrix::<f64, 6, 6>::zeros();
+        let mut b = locus_core::nalgebra::SVector::<f64, 6>::zeros();
+        a[(0, 0)] += 1.0 / p0;
+        for k in 0..n {
+            a[(k, k)] += 1.0 / r;
+            b[k] += z[k] / r;
+            if k > 0 {
+                a[(k, k)] += 1.0 / q;
+                a[(k - 1, k - 1)] += 1.0 / q;
+                a[(k, k - 1)] -= 1.0 / q;
+                a[(k - 1, k)] -= 1.0 / q;
+            }
+        }
+        let cov = a.try_inverse().unwrap();
+        let xb = cov * b;
+        for k in 0..n {
+            assert!((s[k].x[0] - xb[k]).abs() < 1e-12, "mean at {k}");
+            assert!(
+                (s[k].p[(0, 0)] - cov[(k, k)]).abs() < 1e-12,
+                "variance at {k}"
+            );
+        }
+        // The last step has no future: smoothed = filtered.
+        assert_eq!(s[n - 1], nodes[n - 1].posterior);
+    }
+}
