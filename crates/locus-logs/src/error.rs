@@ -65,6 +65,15 @@ pub enum RecordProblem {
         /// The line of its first appearance.
         first_line: usize,
     },
+    /// A record that may appear at most once (a `start` or `sensor` line, a
+    /// `noise` record of one name) appears again.
+    #[error("{what} already appeared on line {first_line}")]
+    DuplicateRecord {
+        /// Which record ("start line", "sensor line", "noise q_v", ...).
+        what: &'static str,
+        /// The line of its first appearance.
+        first_line: usize,
+    },
 }
 
 /// Errors of the log readers.

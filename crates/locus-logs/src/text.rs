@@ -176,6 +176,22 @@ impl<'a> Fields<'a> {
         }
     }
 
+    /// The next field as a finite number that is `> 0`.
+    pub(crate) fn positive(&mut self, field: &'static str) -> Result<f64> {
+        let v = self.f64(field)?;
+        if v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.field_error(
+                field,
+                FieldProblem::OutOfRange {
+                    value: v.to_string(),
+                    expected: "> 0",
+                },
+            ))
+        }
+    }
+
     /// The next field as a non-negative integer.
     pub(crate) fn u32(&mut self, field: &'static str) -> Result<u32> {
         let text = self.next_text(field)?;
