@@ -8,8 +8,10 @@ pub mod noise;
 pub mod sensor;
 pub mod sighting;
 mod text;
+pub mod truth_cursor;
 
 pub use error::{Error, FieldProblem, RecordProblem, Result};
 pub use noise::NoiseRecords;
 pub use sensor::SensorMount;
 pub use sighting::{Landmark, Sighting};
+pub use truth_cursor::TruthCursor;
