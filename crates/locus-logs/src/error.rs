@@ -100,9 +100,10 @@ pub enum Error {
     Decompress {
         /// The file.
         path: PathBuf,
-        /// The decoder's error.
+        /// The decoder's error (corrupt data, failed integrity check,
+        /// truncated stream).
         #[source]
-        source: lzma_rs::error::Error,
+        source: io::Error,
     },
     /// The (decompressed) content is not UTF-8 text.
     #[error("{}:{line}: not valid UTF-8 text", path.display())]

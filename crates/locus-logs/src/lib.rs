@@ -9,6 +9,7 @@ pub mod sensor;
 pub mod sighting;
 mod text;
 pub mod truth_cursor;
+mod xz;
 
 pub use error::{Error, FieldProblem, RecordProblem, Result};
 pub use noise::NoiseRecords;

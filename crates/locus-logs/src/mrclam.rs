@@ -13,8 +13,8 @@
 //! | `RobotN_Odometry.dat` | [`Odometry`] | t \[s\], v \[m/s\], omega \[rad/s\] (commanded) |
 //! | `RobotN_Measurement.dat` | [`Measurement`] | t \[s\], barcode, range \[m\], bearing \[rad\] |
 //!
-//! Each file may be plain or xz-compressed (`NAME.dat.xz`, decompressed in
-//! pure Rust by `lzma-rs`); lines starting with `#` are headers. Times are
+//! Each file may be plain or xz-compressed (`NAME.dat.xz`, decompressed by
+//! liblzma); lines starting with `#` are headers. Times are
 //! UNIX seconds (about 1.25e9, millisecond resolution: `f64` keeps them to
 //! about 2e-7 s). Poses are in the Vicon world frame; bearings are from the
 //! robot's heading, counter-clockwise positive. The camera "is placed to align

@@ -7,9 +7,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, FieldProblem, RecordProblem, Result};
-
-/// The magic bytes that start an xz stream.
-const XZ_MAGIC: [u8; 6] = [0xFD, b'7', b'z', b'X', b'Z', 0x00];
+use crate::xz::{self, XZ_MAGIC};
 
 /// `dir/name` if it exists, else `dir/name.xz` if that exists.
 pub(crate) fn resolve(dir: &Path, name: &str) -> Result<PathBuf> {
@@ -33,15 +31,10 @@ pub(crate) fn read_text(path: &Path) -> Result<String> {
     })?;
     let is_xz = path.extension().is_some_and(|e| e == "xz") || bytes.starts_with(&XZ_MAGIC);
     let bytes = if is_xz {
-        // Text logs compress about 30-60 fold; start with a generous buffer.
-        let mut out = Vec::with_capacity(bytes.len().saturating_mul(32));
-        lzma_rs::xz_decompress(&mut bytes.as_slice(), &mut out).map_err(|source| {
-            Error::Decompress {
-                path: path.to_path_buf(),
-                source,
-            }
-        })?;
-        out
+        xz::decompress(&bytes).map_err(|source| Error::Decompress {
+            path: path.to_path_buf(),
+            source,
+        })?
     } else {
         bytes
     };
