@@ -65,6 +65,15 @@ pub enum RecordProblem {
         /// The line of its first appearance.
         first_line: usize,
     },
+    /// A record that may appear at most once (a `start` or `sensor` line, a
+    /// `noise` record of one name) appears again.
+    #[error("{what} already appeared on line {first_line}")]
+    DuplicateRecord {
+        /// Which record ("start line", "sensor line", "noise q_v", ...).
+        what: &'static str,
+        /// The line of its first appearance.
+        first_line: usize,
+    },
 }
 
 /// Errors of the log readers.
@@ -91,9 +100,10 @@ pub enum Error {
     Decompress {
         /// The file.
         path: PathBuf,
-        /// The decoder's error.
+        /// The decoder's error (corrupt data, failed integrity check,
+        /// truncated stream).
         #[source]
-        source: lzma_rs::error::Error,
+        source: io::Error,
     },
     /// The (decompressed) content is not UTF-8 text.
     #[error("{}:{line}: not valid UTF-8 text", path.display())]

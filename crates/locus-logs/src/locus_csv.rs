@@ -5,6 +5,8 @@
 //!
 //! | kind | fields | units |
 //! |---|---|---|
+//! | `sensor` | x, y, yaw | m, m, rad (robot frame) |
+//! | `noise` | name, value | `q_v` m^2/s, `q_omega` rad^2/s, `sigma_range` m, `sigma_bearing` rad |
 //! | `landmark` | id, x, y | -, m, m |
 //! | `start` | t, x, y, theta | s, m, m, rad |
 //! | `odometry` | t, v, omega | s, m/s, rad/s |
@@ -14,12 +16,17 @@
 //! Lines starting with `#` and blank lines are skipped. Odometry and truth
 //! times must not decrease; measurements are listed in the order the robot
 //! **received** them, so their times may go back (a late measurement);
-//! landmark ids are unique. Errors name the file, line, column and field.
+//! landmark ids are unique; `start` and `sensor` appear at most once, and
+//! each noise name at most once. Measurements are taken by the sensor of the
+//! `sensor` line (at the robot's centre, along its heading, if there is
+//! none). Errors name the file, line, column and field.
 
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, FieldProblem, RecordProblem, Result};
 use crate::mrclam::{Groundtruth, Odometry, TruthPose};
+use crate::noise::NoiseRecords;
+use crate::sensor::SensorMount;
 use crate::text::{TimeOrder, csv_records, read_text};
 
 /// A landmark of the map: an id and a position.
@@ -40,15 +47,20 @@ pub struct LandmarkMeasurement {
     pub time: f64,
     /// The landmark's id.
     pub id: u32,
-    /// Range from the robot's centre, m (>= 0).
+    /// Range from the sensor's origin, m (>= 0).
     pub range: f64,
-    /// Bearing from the robot's heading, counter-clockwise positive, rad.
+    /// Bearing from the sensor's x axis, counter-clockwise positive, rad.
     pub bearing: f64,
 }
 
 /// A whole Locus log.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct LocusLog {
+    /// The landmark sensor's mount (`sensor` line), if given; without one
+    /// the sensor is at the robot's centre, along its heading.
+    pub sensor: Option<SensorMount>,
+    /// The noise levels the log declares (`noise` lines).
+    pub noise: NoiseRecords,
     /// The landmark map, in file order.
     pub landmarks: Vec<MapLandmark>,
     /// The initial pose, if given (`start` line).
@@ -62,7 +74,19 @@ pub struct LocusLog {
 }
 
 /// The kinds a line may start with.
-const KINDS: &str = "one of landmark, start, odometry, measurement, truth";
+const KINDS: &str = "one of sensor, noise, landmark, start, odometry, measurement, truth";
+
+/// The names a `noise` line may give.
+const NOISE_NAMES: &str = "one of q_v, q_omega, sigma_range, sigma_bearing";
+
+/// What a repeated `noise` line is called in its error, by name (in the
+/// order of [`NoiseRecords::NAMES`]).
+const NOISE_WHAT: [&str; 4] = [
+    "noise q_v",
+    "noise q_omega",
+    "noise sigma_range",
+    "noise sigma_bearing",
+];
 
 /// Parses the text of a Locus log; `path` names it in errors.
 ///
@@ -75,10 +99,53 @@ pub fn parse(text: &str, path: &Path) -> Result<LocusLog> {
     let mut truth_order = TimeOrder::new();
     let mut truth: Vec<TruthPose> = Vec::new();
     let mut start_line: Option<usize> = None;
+    let mut sensor_line: Option<usize> = None;
+    // The line of each noise name's record, in the order of NoiseRecords::NAMES.
+    let mut noise_lines: [Option<usize>; 4] = [None; 4];
     for mut f in csv_records(text, path) {
         let kind = f.next_text("kind")?;
         let line = f.line;
         match kind {
+            "sensor" => {
+                let mount = SensorMount {
+                    x: f.f64("x")?,
+                    y: f.f64("y")?,
+                    yaw: f.f64("yaw")?,
+                };
+                if let Some(first_line) = sensor_line {
+                    return Err(f.record_error(RecordProblem::DuplicateRecord {
+                        what: "sensor line",
+                        first_line,
+                    }));
+                }
+                f.end(4)?;
+                log.sensor = Some(mount);
+                sensor_line = Some(line);
+            }
+            "noise" => {
+                let name = f.next_text("name")?;
+                let Some(k) = NoiseRecords::NAMES.iter().position(|n| *n == name) else {
+                    return Err(f.field_error(
+                        "name",
+                        FieldProblem::OutOfRange {
+                            value: name.to_owned(),
+                            expected: NOISE_NAMES,
+                        },
+                    ));
+                };
+                let value = f.positive("value")?;
+                if let Some(first_line) = noise_lines[k] {
+                    return Err(f.record_error(RecordProblem::DuplicateRecord {
+                        what: NOISE_WHAT[k],
+                        first_line,
+                    }));
+                }
+                f.end(3)?;
+                if let Some(slot) = log.noise.get_mut(name) {
+                    *slot = Some(value);
+                }
+                noise_lines[k] = Some(line);
+            }
             "landmark" => {
                 let lm = MapLandmark {
                     id: f.u32("id")?,
@@ -99,9 +166,8 @@ pub fn parse(text: &str, path: &Path) -> Result<LocusLog> {
             "start" => {
                 let pose = pose(&mut f)?;
                 if let Some(first_line) = start_line {
-                    return Err(f.record_error(RecordProblem::Duplicate {
+                    return Err(f.record_error(RecordProblem::DuplicateRecord {
                         what: "start line",
-                        value: 1,
                         first_line,
                     }));
                 }
@@ -193,7 +259,13 @@ fn existing(path: &Path) -> Result<PathBuf> {
 #[must_use]
 pub fn write(log: &LocusLog) -> String {
     use core::fmt::Write as _;
-    let mut s = String::from("# Locus log v1 (docs/log-format.md); SI units\n");
+    let mut s = String::from("# Locus log v2 (docs/log-format.md); SI units\n");
+    if let Some(m) = log.sensor {
+        let _ = writeln!(s, "sensor,{},{},{}", m.x, m.y, m.yaw);
+    }
+    for (name, value) in log.noise.iter() {
+        let _ = writeln!(s, "noise,{name},{value}");
+    }
     for l in &log.landmarks {
         let _ = writeln!(s, "landmark,{},{},{}", l.id, l.x, l.y);
     }
@@ -235,7 +307,150 @@ mod tests {
         assert_eq!(log.measurements[1].time, 0.015, "measurements may go back");
         assert_eq!(log.truth.poses().len(), 2);
         assert_eq!(log.start.unwrap().theta, 0.1);
+        assert_eq!(log.sensor, None, "a version 1 log has no sensor line");
+        assert_eq!(log.noise, NoiseRecords::default());
         assert_eq!(parse(&write(&log), p()).unwrap(), log);
+    }
+
+    #[test]
+    fn parses_sensor_and_noise_and_round_trips() {
+        let text = "# Locus log v2\nnoise,sigma_bearing,0.03\nsensor, 0.1 ,-0.02,1.5707963267948966\n\
+                    landmark,6,1.5,-2\nnoise,q_v,1e-2\nodometry,0,0.1,0\nmeasurement,0.02,6,2.5,0.3\n";
+        let log = parse(text, p()).unwrap();
+        assert_eq!(
+            log.sensor,
+            Some(SensorMount {
+                x: 0.1,
+                y: -0.02,
+                yaw: core::f64::consts::FRAC_PI_2
+            })
+        );
+        assert_eq!(
+            log.noise,
+            NoiseRecords {
+                q_v: Some(0.01),
+                sigma_bearing: Some(0.03),
+                ..NoiseRecords::default()
+            }
+        );
+        let written = write(&log);
+        assert!(written.starts_with("# Locus log v2"), "{written}");
+        assert!(
+            written.contains("\nsensor,0.1,-0.02,1.5707963267948966\n"),
+            "{written}"
+        );
+        assert!(
+            written.contains("\nnoise,q_v,0.01\nnoise,sigma_bearing,0.03\n"),
+            "{written}"
+        );
+        assert_eq!(parse(&written, p()).unwrap(), log);
+
+        // A centred sensor given explicitly is kept as given.
+        let log = parse(
+            "sensor,0,0,0\nnoise,q_omega,2\nnoise,sigma_range,0.2\n",
+            p(),
+        )
+        .unwrap();
+        assert_eq!(log.sensor, Some(SensorMount::default()));
+        assert_eq!(parse(&write(&log), p()).unwrap(), log);
+        assert!(!write(&LocusLog::default()).contains("sensor"));
+    }
+
+    /// The error of parsing `text`, as its message.
+    fn message(text: &str) -> String {
+        parse(text, p()).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn malformed_sensor_lines_name_the_line_and_field() {
+        assert_eq!(
+            message("landmark,6,1,2\nsensor,0.1,0\n"),
+            "log.csv:2: field \"yaw\" (column 4): missing"
+        );
+        assert_eq!(
+            message("sensor,0.1,inf,0\n"),
+            "log.csv:1: field \"y\" (column 3): \"inf\" is not finite"
+        );
+        assert_eq!(
+            message("sensor,NaN,0,0\n"),
+            "log.csv:1: field \"x\" (column 2): \"NaN\" is not finite"
+        );
+        assert_eq!(
+            message("sensor,0.1,0,0x1\n"),
+            "log.csv:1: field \"yaw\" (column 4): \"0x1\" is not a number"
+        );
+        assert_eq!(
+            message("sensor,0,0,0,0\n"),
+            "log.csv:1: 5 fields, the format has 4"
+        );
+        assert_eq!(
+            message("# a\nsensor,0.1,0,0\nlandmark,6,1,2\nsensor,0.1,0,0\n"),
+            "log.csv:4: sensor line already appeared on line 2"
+        );
+        let e = parse("sensor,0,0,0\nsensor,0,0,0\n", p()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                Error::Record {
+                    line: 2,
+                    problem: RecordProblem::DuplicateRecord {
+                        what: "sensor line",
+                        first_line: 1
+                    },
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn malformed_noise_lines_name_the_line_and_field() {
+        assert_eq!(
+            message("noise,q_v\n"),
+            "log.csv:1: field \"value\" (column 3): missing"
+        );
+        assert_eq!(
+            message("noise\n"),
+            "log.csv:1: field \"name\" (column 2): missing"
+        );
+        assert_eq!(
+            message("\nnoise,sigma_rng,0.2\n"),
+            "log.csv:2: field \"name\" (column 2): sigma_rng is out of range: \
+             one of q_v, q_omega, sigma_range, sigma_bearing"
+        );
+        assert_eq!(
+            message("noise,q_omega,0\n"),
+            "log.csv:1: field \"value\" (column 3): 0 is out of range: > 0"
+        );
+        assert_eq!(
+            message("noise,sigma_range,-0.2\n"),
+            "log.csv:1: field \"value\" (column 3): -0.2 is out of range: > 0"
+        );
+        assert_eq!(
+            message("noise,sigma_bearing,inf\n"),
+            "log.csv:1: field \"value\" (column 3): \"inf\" is not finite"
+        );
+        assert_eq!(
+            message("noise,q_v,0.1,0.2\n"),
+            "log.csv:1: 4 fields, the format has 3"
+        );
+        assert_eq!(
+            message("noise,q_v,0.1\nnoise,q_omega,0.1\nnoise,q_v,0.2\n"),
+            "log.csv:3: noise q_v already appeared on line 1"
+        );
+        assert_eq!(
+            message("noise,sigma_bearing,0.1\n\nnoise,sigma_bearing,0.1\n"),
+            "log.csv:3: noise sigma_bearing already appeared on line 1"
+        );
+    }
+
+    #[test]
+    fn a_second_start_line_names_the_first() {
+        assert_eq!(
+            message("start,0,0,0,0\nstart,1,0,0,0\n"),
+            "log.csv:2: start line already appeared on line 1"
+        );
     }
 
     #[test]

@@ -13,8 +13,8 @@
 //! | `RobotN_Odometry.dat` | [`Odometry`] | t \[s\], v \[m/s\], omega \[rad/s\] (commanded) |
 //! | `RobotN_Measurement.dat` | [`Measurement`] | t \[s\], barcode, range \[m\], bearing \[rad\] |
 //!
-//! Each file may be plain or xz-compressed (`NAME.dat.xz`, decompressed in
-//! pure Rust by `lzma-rs`); lines starting with `#` are headers. Times are
+//! Each file may be plain or xz-compressed (`NAME.dat.xz`, decompressed by
+//! liblzma); lines starting with `#` are headers. Times are
 //! UNIX seconds (about 1.25e9, millisecond resolution: `f64` keeps them to
 //! about 2e-7 s). Poses are in the Vicon world frame; bearings are from the
 //! robot's heading, counter-clockwise positive. The camera "is placed to align
@@ -37,6 +37,7 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, RecordProblem, Result};
 use crate::text::{Fields, TimeOrder, read_text, records, resolve};
+pub use crate::truth_cursor::TruthCursor;
 
 /// The robots' subject numbers (and the `N` of the `RobotN_*` files).
 pub const ROBOTS: RangeInclusive<u32> = 1..=5;
@@ -240,25 +241,49 @@ impl Groundtruth {
     /// are more than `max_gap` seconds apart (a gap in the coverage). A `t`
     /// equal to a sample's time returns that sample.
     pub fn pose_at(&self, t: f64, max_gap: f64) -> Option<TruthPose> {
-        // First index with time > t.
-        let i = self.poses.partition_point(|p| p.time <= t);
-        let a = *self.poses.get(i.checked_sub(1)?)?;
-        if a.time == t {
-            return Some(a);
-        }
-        let b = *self.poses.get(i)?;
-        let dt = b.time - a.time;
-        if dt > max_gap {
-            return None;
-        }
-        let w = (t - a.time) / dt;
-        Some(TruthPose {
-            time: t,
-            x: a.x + w * (b.x - a.x),
-            y: a.y + w * (b.y - a.y),
-            theta: wrap(a.theta + w * wrap(b.theta - a.theta)),
-        })
+        interpolate(
+            &self.poses,
+            self.poses.partition_point(|p| p.time <= t),
+            t,
+            max_gap,
+        )
     }
+
+    /// A cursor for looking poses up at times that mostly do not decrease
+    /// (a replay's events): [`TruthCursor::pose_at`] returns what
+    /// [`Groundtruth::pose_at`] does, walking on from the previous lookup
+    /// instead of searching the whole track each time.
+    #[must_use]
+    pub fn cursor(&self) -> TruthCursor<'_> {
+        TruthCursor::new(&self.poses)
+    }
+}
+
+/// The pose at `t` (s) from `poses` (non-decreasing times) and `after`, the
+/// index of the first pose whose time is `> t` (`poses.len()` if none):
+/// [`Groundtruth::pose_at`]'s interpolation, shared with [`TruthCursor`].
+pub(crate) fn interpolate(
+    poses: &[TruthPose],
+    after: usize,
+    t: f64,
+    max_gap: f64,
+) -> Option<TruthPose> {
+    let a = *poses.get(after.checked_sub(1)?)?;
+    if a.time == t {
+        return Some(a);
+    }
+    let b = *poses.get(after)?;
+    let dt = b.time - a.time;
+    if dt > max_gap {
+        return None;
+    }
+    let w = (t - a.time) / dt;
+    Some(TruthPose {
+        time: t,
+        x: a.x + w * (b.x - a.x),
+        y: a.y + w * (b.y - a.y),
+        theta: wrap(a.theta + w * wrap(b.theta - a.theta)),
+    })
 }
 
 /// Wraps an angle (rad) to (-pi, pi].

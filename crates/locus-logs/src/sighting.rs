@@ -22,8 +22,10 @@ pub struct Sighting {
     pub arrival: f64,
     /// The landmark's id.
     pub landmark: u32,
-    /// Range from the robot's centre, m.
+    /// Range from the landmark sensor's origin, m (the robot's centre
+    /// unless the log places the sensor elsewhere, see [`crate::SensorMount`]).
     pub range: f64,
-    /// Bearing from the robot's heading, counter-clockwise positive, rad.
+    /// Bearing from the landmark sensor's x axis (the robot's heading unless
+    /// the log places the sensor elsewhere), counter-clockwise positive, rad.
     pub bearing: f64,
 }

@@ -1,13 +1,14 @@
 //! A recorded robot log in the form the replay consumes: the landmark map,
 //! odometry in time order, landmark sightings in the order they were
-//! received, optional ground truth and initial pose. Built from an MRCLAM
+//! received, optional ground truth and initial pose, the landmark sensor's
+//! mount and the noise levels the log declares. Built from an MRCLAM
 //! dataset ([`Log::mrclam`]) or a Locus CSV log ([`Log::locus_csv`]).
 
 use std::path::Path;
 
 use locus_logs::locus_csv::{self, LocusLog};
 use locus_logs::mrclam::{Dataset, Groundtruth, Odometry, TruthPose};
-pub use locus_logs::{Landmark, Sighting};
+pub use locus_logs::{Landmark, NoiseRecords, SensorMount, Sighting};
 
 /// A robot's log, ready to replay.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -33,12 +34,21 @@ pub struct Log {
     /// Sightings of targets not in the map (MRCLAM: barcodes absent from
     /// `Barcodes.dat`), left out of [`Log::sightings`].
     pub unknown_sightings: usize,
+    /// The landmark sensor's mount in the robot frame (m, m, rad): every
+    /// sighting's range is from its origin and its bearing from its x axis.
+    /// All zeros (the default) is a sensor at the robot's centre, along its
+    /// heading.
+    pub sensor: SensorMount,
+    /// The noise levels the log declares (none for MRCLAM).
+    pub noise: NoiseRecords,
 }
 
 impl Log {
     /// Robot `robot`'s log of an opened MRCLAM dataset: landmark sightings
     /// (barcodes mapped to subjects; robot sightings and unknown barcodes
-    /// counted and left out), arrival = time.
+    /// counted and left out), arrival = time. The sensor is at the robot's
+    /// centre (the dataset's camera "is placed to align with the robot body
+    /// frame") and no noise levels are declared.
     ///
     /// # Errors
     /// The reader's errors (missing file, malformed line, no such robot).
@@ -77,6 +87,8 @@ impl Log {
             start: None,
             robot_sightings: split.robots.len(),
             unknown_sightings: split.unknown.len(),
+            sensor: SensorMount::default(),
+            noise: NoiseRecords::default(),
         })
     }
 
@@ -84,7 +96,8 @@ impl Log {
     /// earlier than every measurement listed before it (its arrival is the
     /// running maximum of the times so far): a line whose time goes back is
     /// a late measurement. Measurements of ids not in the map are counted
-    /// in [`Log::unknown_sightings`] and left out.
+    /// in [`Log::unknown_sightings`] and left out. A log without a `sensor`
+    /// line has its sensor at the robot's centre ([`SensorMount::default`]).
     #[must_use]
     pub fn from_locus(name: &str, log: LocusLog) -> Self {
         let mut arrival = f64::NEG_INFINITY;
@@ -121,6 +134,8 @@ impl Log {
             start: log.start,
             robot_sightings: 0,
             unknown_sightings: unknown,
+            sensor: log.sensor.unwrap_or_default(),
+            noise: log.noise,
         }
     }
 
@@ -137,10 +152,14 @@ impl Log {
     }
 
     /// The log as a Locus CSV log (measurements in arrival order), e.g. to
-    /// convert an MRCLAM robot into the format.
+    /// convert an MRCLAM robot into the format. The sensor is written only
+    /// if it is not at the robot's centre ([`SensorMount::is_centred`]), so
+    /// that a log with a centred sensor reads back the same either way.
     #[must_use]
     pub fn to_locus(&self) -> LocusLog {
         LocusLog {
+            sensor: (!self.sensor.is_centred()).then_some(self.sensor),
+            noise: self.noise,
             landmarks: self
                 .landmarks
                 .iter()
@@ -179,5 +198,50 @@ impl Log {
     #[must_use]
     pub fn landmark(&self, id: u32) -> Option<&Landmark> {
         self.landmarks.iter().find(|l| l.id == id)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> LocusLog {
+        locus_csv::parse(text, Path::new("t.csv")).unwrap()
+    }
+
+    #[test]
+    fn sensor_and_noise_pass_through_both_ways() {
+        let csv = parse(
+            "sensor,0.1,-0.05,0.2\nnoise,q_v,0.02\nnoise,sigma_bearing,0.05\n\
+             landmark,6,1,2\nodometry,0,0,0\nmeasurement,0.5,6,2,0.1\n",
+        );
+        let log = Log::from_locus("t", csv.clone());
+        assert_eq!(
+            log.sensor,
+            SensorMount {
+                x: 0.1,
+                y: -0.05,
+                yaw: 0.2
+            }
+        );
+        assert_eq!(log.noise.q_v, Some(0.02));
+        assert_eq!(log.noise.sigma_bearing, Some(0.05));
+        assert_eq!(log.noise.q_omega, None);
+        assert_eq!(log.to_locus(), csv);
+        assert_eq!(Log::from_locus("t", log.to_locus()), log);
+    }
+
+    #[test]
+    fn a_centred_sensor_is_the_default_and_is_not_written() {
+        let csv = parse("landmark,6,1,2\nodometry,0,0,0\n");
+        let log = Log::from_locus("t", csv.clone());
+        assert_eq!(log.sensor, SensorMount::default());
+        assert_eq!(log.noise, NoiseRecords::default());
+        assert_eq!(log.to_locus(), csv);
+        // Given explicitly, it reads the same and is left out on the way back.
+        let explicit =
+            Log::from_locus("t", parse("sensor,0,0,0\nlandmark,6,1,2\nodometry,0,0,0\n"));
+        assert_eq!(explicit, log);
+        assert_eq!(explicit.to_locus().sensor, None);
     }
 }
