@@ -23,9 +23,6 @@ pub struct Config {
     /// Student-t degrees of freedom of the sightings' noise (heavy tails:
     /// see `locus_core::StudentT`), or `None` for Gaussian noise.
     pub robust_dof: Option<f64>,
-    /// The landmark sensor's mount on the robot: x, y (m) and yaw (rad) in
-    /// the robot frame (a log's `sensor` record).
-    pub sensor: [f64; 3],
     /// Run the Rauch-Tung-Striebel smoother after the forward pass: every
     /// step then also carries its smoothed estimate, and the report the
     /// smoother's figures.
@@ -106,7 +103,6 @@ impl Default for Config {
             sigma_bearing: 0.01,
             calibration: Calibration::default(),
             robust_dof: Some(4.0),
-            sensor: [0.0; 3],
             smooth: false,
             gate: Some(0.99),
             recover_after: 5,
@@ -164,10 +160,6 @@ impl Config {
             (
                 self.robust_dof.is_none_or(positive),
                 "robust degrees of freedom must be finite and > 0",
-            ),
-            (
-                self.sensor.iter().all(|v| v.is_finite()),
-                "sensor mount must be finite",
             ),
             (
                 self.gate.is_none_or(|g| g > 0.0 && g < 1.0),

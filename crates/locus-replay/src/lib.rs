@@ -19,8 +19,18 @@
 //! * **Events in canonical order.** Events are kept sorted by time, then
 //!   odometry before sightings, then sightings by landmark, range and
 //!   bearing; odometry records at equal times keep their log order.
-//! * **Correction.** Each landmark sighting is one [`RangeBearing`]
-//!   correction (sensor at the robot's centre). Sightings of landmarks not
+//! * **Correction.** Each landmark sighting is one range-bearing
+//!   correction from the sensor where the log's `sensor` record mounts it
+//!   ([`Log::sensor`]; the robot's centre by default), with the bearing
+//!   bias state ([`CalibratedRangeBearing`]), weighted as Student-t noise
+//!   ([`Config::robust_dof`]).
+//! * **Calibration.** The state holds the pose and the odometry and sensor
+//!   calibration ([`CalibratedUnicycle`](locus_models::calibrated_unicycle::CalibratedUnicycle):
+//!   scale factors of the logged speed and turn rate, turn-rate and bearing
+//!   biases), estimated with it ([`Config::calibration`]).
+//! * **Smoothing.** With [`Config::smooth`], the Rauch-Tung-Striebel
+//!   smoother runs backwards over the final forward pass; each step then
+//!   carries its smoothed pose and the report the smoother's figures. Sightings of landmarks not
 //!   in the map are counted and skipped; robot-to-robot sightings never
 //!   reach the replay (the MRCLAM log splits them off).
 //! * **Gating with recovery.** The running filter's chi-square gate
@@ -239,11 +249,11 @@ fn apply(
                 let model = CalibratedRangeBearing {
                     inner: RangeBearing::new(
                         Vector2::new(l.x, l.y),
-                        Vector2::new(cfg.sensor[0], cfg.sensor[1]),
+                        Vector2::new(log.sensor.x, log.sensor.y),
                         cfg.sigma_range,
                         cfg.sigma_bearing,
                     ),
-                    yaw: cfg.sensor[2],
+                    yaw: log.sensor.yaw,
                 };
                 let update = track.correct(rules, &model, &Vector2::new(z.range, z.bearing))?;
                 if let Some(first) = update.first_attempt() {

@@ -324,3 +324,49 @@ fn gating_recovers_from_an_over_confident_start() {
     assert!(r.inflations > 0 && r.gated_share() < 0.10);
     assert!(r.summary.ekf_position_rmse < 0.40);
 }
+
+/// Robot `log`'s sightings as a sensor mounted `ahead` metres in front of
+/// the centre (and turned by `yaw`) would have taken them: each sighting's
+/// point in the robot frame, seen from the sensor.
+fn seen_from(log: &Log, ahead: f64, yaw: f64) -> Log {
+    let mut out = log.clone();
+    for s in &mut out.sightings {
+        let (px, py) = (s.range * s.bearing.cos() - ahead, s.range * s.bearing.sin());
+        s.range = px.hypot(py);
+        s.bearing = locus_core::wrap_angle(py.atan2(px) - yaw);
+    }
+    out.sensor = locus_logs::SensorMount {
+        x: ahead,
+        y: 0.0,
+        yaw,
+    };
+    out
+}
+
+/// A sensor 0.2 m ahead of the centre (turned 0.05 rad): with its `sensor`
+/// record the log localises as well as the centred one (within 5 %: the
+/// same sightings in another frame, their noise now in the sensor's);
+/// without the record, clearly worse (measured: robot 2 0.190 / 0.190 /
+/// 0.307 m, robot 3 0.163 / 0.168 / 0.297 m).
+#[test]
+fn a_sensor_record_puts_an_off_centre_sensor_where_it_is() {
+    let cfg = Config::default();
+    println!("| robot | centred [m] | sensor 0.2 m ahead, with record [m] | without record [m] |");
+    println!("|---|---|---|---|");
+    for (i, log) in logs()
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| [1, 2].contains(i))
+    {
+        let centred = run(log, &cfg).summary.ekf_position_rmse;
+        let mounted = seen_from(log, 0.2, 0.05);
+        let with = run(&mounted, &cfg).summary.ekf_position_rmse;
+        let mut ignored = mounted.clone();
+        ignored.sensor = locus_logs::SensorMount::default();
+        let without = run(&ignored, &cfg).summary.ekf_position_rmse;
+        println!("| {} | {centred:.3} | {with:.3} | {without:.3} |", i + 1);
+        // Not identical: the noise is applied in the sensor frame.
+        assert!((with / centred - 1.0).abs() < 0.05, "robot {}", i + 1);
+        assert!(without > 1.2 * with, "robot {}", i + 1);
+    }
+}

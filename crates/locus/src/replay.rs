@@ -75,17 +75,21 @@ struct Common {
     #[arg(long)]
     no_gate: bool,
     /// Power spectral density of the forward-speed noise, m^2/s.
-    #[arg(long, default_value_t = Config::default().q_v)]
-    q_v: f64,
+    /// Default: the log's `noise` record, else 0.01.
+    #[arg(long)]
+    q_v: Option<f64>,
     /// Power spectral density of the turn-rate noise, rad^2/s.
-    #[arg(long, default_value_t = Config::default().q_omega)]
-    q_omega: f64,
+    /// Default: the log's `noise` record, else 0.02.
+    #[arg(long)]
+    q_omega: Option<f64>,
     /// Range noise standard deviation, m.
-    #[arg(long, default_value_t = Config::default().sigma_range)]
-    sigma_range: f64,
+    /// Default: the log's `noise` record, else 1.
+    #[arg(long)]
+    sigma_range: Option<f64>,
     /// Bearing noise standard deviation, rad.
-    #[arg(long, default_value_t = Config::default().sigma_bearing)]
-    sigma_bearing: f64,
+    /// Default: the log's `noise` record, else 0.01.
+    #[arg(long)]
+    sigma_bearing: Option<f64>,
     /// Initial value of the forward-speed scale factor (a state the filter
     /// estimates: the logged speed times it is the robot's).
     #[arg(long, default_value_t = 1.0)]
@@ -102,8 +106,8 @@ struct Common {
     #[arg(long)]
     no_robust: bool,
     /// Also run the Rauch-Tung-Striebel smoother over the whole log: its
-    /// figures beside the filter's, its estimate in log.csv's `smooth_*`
-    /// columns.
+    /// accuracy, 3-sigma shares and NEES beside the filter's (table and
+    /// metrics.json).
     #[arg(long)]
     smooth: bool,
     /// Pictures.
@@ -112,12 +116,19 @@ struct Common {
 }
 
 impl Common {
-    fn config(&self) -> Config {
+    /// The replay's settings: each noise from its flag, else from the log's
+    /// `noise` record, else the default.
+    fn config(&self, log: &Log) -> Config {
+        let d = Config::default();
+        let n = &log.noise;
         Config {
-            q_v: self.q_v,
-            q_omega: self.q_omega,
-            sigma_range: self.sigma_range,
-            sigma_bearing: self.sigma_bearing,
+            q_v: self.q_v.or(n.q_v).unwrap_or(d.q_v),
+            q_omega: self.q_omega.or(n.q_omega).unwrap_or(d.q_omega),
+            sigma_range: self.sigma_range.or(n.sigma_range).unwrap_or(d.sigma_range),
+            sigma_bearing: self
+                .sigma_bearing
+                .or(n.sigma_bearing)
+                .unwrap_or(d.sigma_bearing),
             gate: (!self.no_gate).then_some(self.gate),
             robust_dof: (!self.no_robust).then_some(self.robust_dof),
             smooth: self.smooth,
@@ -153,7 +164,7 @@ pub fn run(args: &Args) -> Result<()> {
         }
         Source::Csv { file, common } => (Log::locus_csv(file)?, common),
     };
-    let cfg = common.config();
+    let cfg = common.config(&log);
     let slug: String = log
         .name
         .chars()
