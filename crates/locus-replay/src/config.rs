@@ -23,6 +23,10 @@ pub struct Config {
     /// Student-t degrees of freedom of the sightings' noise (heavy tails:
     /// see `locus_core::StudentT`), or `None` for Gaussian noise.
     pub robust_dof: Option<f64>,
+    /// How long after an odometry record's time stamp the robot moves as
+    /// it says, s (>= 0): commanded velocities lead the motion they
+    /// command. Odometry records are applied at their time plus this.
+    pub odometry_delay: f64,
     /// Run the Rauch-Tung-Striebel smoother after the forward pass: every
     /// step then also carries its smoothed estimate, and the report the
     /// smoother's figures.
@@ -103,6 +107,7 @@ impl Default for Config {
             sigma_bearing: 0.01,
             calibration: Calibration::default(),
             robust_dof: Some(4.0),
+            odometry_delay: 0.0,
             smooth: false,
             gate: Some(0.99),
             recover_after: 5,
@@ -175,6 +180,10 @@ impl Config {
                 "initial standard deviations must be finite and > 0",
             ),
             (positive(self.horizon), "horizon must be finite and > 0"),
+            (
+                self.odometry_delay.is_finite() && (0.0..=10.0).contains(&self.odometry_delay),
+                "odometry_delay must be in [0, 10] s",
+            ),
             (
                 positive(self.truth_max_gap),
                 "truth_max_gap must be finite and > 0",

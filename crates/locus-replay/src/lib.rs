@@ -23,16 +23,16 @@
 //!   correction from the sensor where the log's `sensor` record mounts it
 //!   ([`Log::sensor`]; the robot's centre by default), with the bearing
 //!   bias state ([`CalibratedRangeBearing`]), weighted as Student-t noise
-//!   ([`Config::robust_dof`]).
+//!   ([`Config::robust_dof`]). Sightings of landmarks not in the map are
+//!   counted and skipped; robot-to-robot sightings never reach the replay
+//!   (the MRCLAM log splits them off).
 //! * **Calibration.** The state holds the pose and the odometry and sensor
 //!   calibration ([`CalibratedUnicycle`](locus_models::calibrated_unicycle::CalibratedUnicycle):
 //!   scale factors of the logged speed and turn rate, turn-rate and bearing
 //!   biases), estimated with it ([`Config::calibration`]).
 //! * **Smoothing.** With [`Config::smooth`], the Rauch-Tung-Striebel
 //!   smoother runs backwards over the final forward pass; each step then
-//!   carries its smoothed pose and the report the smoother's figures. Sightings of landmarks not
-//!   in the map are counted and skipped; robot-to-robot sightings never
-//!   reach the replay (the MRCLAM log splits them off).
+//!   carries its smoothed pose and the report the smoother's figures.
 //! * **Gating with recovery.** The running filter's chi-square gate
 //!   ([`Config::gate`]) rejects
 //!   outliers. A filter that has become over-confident would reject every
@@ -51,6 +51,7 @@
 
 mod config;
 pub mod log;
+pub mod noise;
 mod report;
 mod smoother;
 mod step;
@@ -381,6 +382,7 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             belief: pose_belief(&after.belief),
             calibration: calibration_of(&after.belief).map(|c| c.0),
             smoothed: None,
+            smoothed_calibration: None,
             dead_reckoning: [d[0], d[1], d[2]],
             truth: self.log.truth.pose_at(time, self.cfg.truth_max_gap),
         };
@@ -421,6 +423,7 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
         for ((step, _), s) in self.held.iter_mut().zip(&smoothed) {
             let pose = pose_belief(s);
             step.smoothed = Some(pose);
+            step.smoothed_calibration = Some(calibration_of(s).map(|c| c.0));
             if let Some(sample) = step.sample_of(&pose) {
                 tally.push(&sample);
             }
@@ -555,15 +558,19 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
     let mut sightings = log.sightings.iter().peekable();
     loop {
         let take_odometry = match (odometry.peek(), sightings.peek()) {
-            (Some(o), Some(s)) => o.time <= s.arrival,
+            (Some(o), Some(s)) => o.time + cfg.odometry_delay <= s.arrival,
             (Some(_), None) => true,
             (None, Some(_)) => false,
             (None, None) => break,
         };
         if take_odometry {
             if let Some(o) = odometry.next() {
+                let o = Odometry {
+                    time: o.time + cfg.odometry_delay,
+                    ..*o
+                };
                 engine.finalise_before(o.time - cfg.horizon);
-                engine.insert(Event::Odometry(*o))?;
+                engine.insert(Event::Odometry(o))?;
             }
         } else if let Some(s) = sightings.next() {
             engine.finalise_before(s.arrival - cfg.horizon);

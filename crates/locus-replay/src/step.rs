@@ -69,6 +69,9 @@ pub struct Step {
     pub calibration: [f64; 4],
     /// The smoothed belief of the pose (with `Config::smooth`).
     pub smoothed: Option<Belief<f64, 3>>,
+    /// The smoothed calibration, in [`Step::calibration`]'s order (with
+    /// `Config::smooth`).
+    pub smoothed_calibration: Option<[f64; 4]>,
     /// Dead reckoning (odometry alone) `[x, y, theta]` at this time.
     pub dead_reckoning: [f64; 3],
     /// Ground truth interpolated at this time, if covered.

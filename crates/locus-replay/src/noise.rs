@@ -1,0 +1,322 @@
+//! Noise and odometry delay estimated from the log alone (no ground truth).
+//!
+//! Three estimates, each with a method that works on logs like MRCLAM's:
+//!
+//! * **Odometry delay** (how long after a commanded velocity the robot moves
+//!   as commanded): the delay of a grid ([`DELAYS`]) that minimises the
+//!   filter's innovation negative log-likelihood, all else fixed. A robot
+//!   that lags its commands makes every prediction late, and the
+//!   sightings say so.
+//! * **Measurement noise** by expectation-maximisation over the smoother
+//!   (Shumway and Stoffer, "An approach to time series smoothing and
+//!   forecasting using the EM algorithm", J. Time Series Analysis 3(4),
+//!   1982; for the extended smoother, Sarkka, "Bayesian Filtering and
+//!   Smoothing", 2013, section 12.2.3): the M-step's variance is the
+//!   spread of the sightings' residuals against the smoothed trajectory
+//!   plus the smoother's own uncertainty in the predicted measurement
+//!   (`H Ps H^T`). Two changes for real logs: the spread is taken robustly
+//!   (1.4826 times the median absolute deviation), so the 1-4 % of gross
+//!   outliers do not set it; and errors that persist (a camera's range to
+//!   a landmark is often wrong the same way for seconds) are accounted for
+//!   by their integrated autocorrelation time `tau`, estimated by batch
+//!   means (Flyvbjerg and Petersen, "Error estimates on averages of
+//!   correlated data", J. Chem. Phys. 91, 1989: residuals grouped by
+//!   landmark in windows of [`WINDOW`] seconds, `tau = mean(n_w m_w^2) /
+//!   sigma^2`); each sighting then gets the variance `sigma^2 tau`, what a
+//!   correlated sequence is worth when it is applied as independent
+//!   (inflation for neglected correlation, as in Stewart, Dance and
+//!   Nichols, "Correlated observation errors in data assimilation", Int.
+//!   J. Numer. Meth. Fluids 56, 2008).
+//! * **Process noise** (one factor on both power spectral densities, their
+//!   ratio kept): the factor of a grid ([`Q_FACTORS`]) that minimises the
+//!   innovation negative log-likelihood, the maximum-likelihood choice.
+//!
+//! The order: a measurement round, the delay, a measurement round and the
+//! process noise, a last measurement round. Each round replays the whole
+//! log (the smoother's rounds twice as long as the filter's).
+//!
+//! What this recovers and where it is not enough is measured in
+//! docs/replay.md: on a simulated log with white noise it recovers the
+//! noise it was made with; on MRCLAM the process noise it finds is the
+//! likelihood's, which is smaller than what keeps the filter honest when
+//! the odometry's errors are not white.
+
+extern crate alloc;
+use alloc::collections::BTreeMap;
+
+use locus_core::nalgebra::{SVector, Vector2};
+use locus_core::{MeasurementModel, wrap_angle};
+use locus_models::calibrated_range_bearing::CalibratedRangeBearing;
+use locus_models::range_bearing::RangeBearing;
+
+use crate::{Config, Error, EventKind, Log, STATE, Step, replay};
+
+/// Window of the batch-means estimate of the residuals' correlation, s.
+pub const WINDOW: f64 = 10.0;
+/// The odometry delays tried, s.
+pub const DELAYS: [f64; 8] = [0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4];
+/// The factors on the process noise tried.
+pub const Q_FACTORS: [f64; 9] = [0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0];
+
+/// One measurement round's findings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Round {
+    /// The settings the round replayed with.
+    pub config: Config,
+    /// Spread of the range residuals (robust, with the smoother's own
+    /// uncertainty), m.
+    pub range_spread: f64,
+    /// Their integrated autocorrelation time, in sightings (>= 1).
+    pub range_tau: f64,
+    /// Spread of the bearing residuals, rad.
+    pub bearing_spread: f64,
+    /// Their integrated autocorrelation time, in sightings (>= 1).
+    pub bearing_tau: f64,
+}
+
+/// The estimate: the settings to replay with, and how they were reached.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Estimate {
+    /// The start settings with the estimated `q_v`, `q_omega`,
+    /// `sigma_range`, `sigma_bearing` and `odometry_delay`.
+    pub config: Config,
+    /// The measurement rounds, in order.
+    pub rounds: Vec<Round>,
+    /// `(delay s, innovation NLL)` for each delay tried.
+    pub delays: Vec<(f64, f64)>,
+    /// `(factor, innovation NLL)` for each process-noise factor tried.
+    pub q_factors: Vec<(f64, f64)>,
+}
+
+/// What a round keeps of each smoothed sighting.
+struct Kept {
+    time: f64,
+    landmark: u32,
+    range: f64,
+    bearing: f64,
+    state: SVector<f64, STATE>,
+    covariance: locus_core::nalgebra::Matrix3<f64>,
+}
+
+/// Robust spread: 1.4826 times the median absolute deviation from the
+/// median (NaN if empty).
+fn robust_spread(mut values: Vec<f64>) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    values.sort_by(f64::total_cmp);
+    let median = values[values.len() / 2];
+    let mut dev: Vec<f64> = values.iter().map(|v| (v - median).abs()).collect();
+    dev.sort_by(f64::total_cmp);
+    1.4826 * dev[dev.len() / 2]
+}
+
+/// Batch-means integrated autocorrelation time of residuals `(landmark,
+/// time, value)` of spread `sigma` (values clipped at 3 sigma so outliers
+/// do not set it); at least 1.
+#[allow(clippy::cast_precision_loss)]
+fn batch_tau(residuals: &[(u32, f64, f64)], sigma: f64) -> f64 {
+    if sigma.is_nan() || sigma <= 0.0 {
+        return 1.0;
+    }
+    let mut windows: BTreeMap<(u32, i64), (usize, f64)> = BTreeMap::new();
+    for &(landmark, t, v) in residuals {
+        #[allow(clippy::cast_possible_truncation)]
+        let w = (t / WINDOW).floor() as i64;
+        let e = windows.entry((landmark, w)).or_insert((0, 0.0));
+        e.0 += 1;
+        e.1 += v.clamp(-3.0 * sigma, 3.0 * sigma);
+    }
+    let (mut sum, mut count) = (0.0, 0usize);
+    for (n, total) in windows.values() {
+        if *n >= 2 {
+            let mean = total / *n as f64;
+            sum += *n as f64 * mean * mean;
+            count += 1;
+        }
+    }
+    if count == 0 {
+        return 1.0;
+    }
+    (sum / count as f64 / (sigma * sigma)).max(1.0)
+}
+
+/// One measurement round: replays `log` with `cfg` and the smoother, and
+/// sets the measurement noise from the residuals (see the module
+/// documentation). Returns the round's findings and the next settings.
+///
+/// # Errors
+/// The replay's errors.
+#[allow(clippy::cast_precision_loss)]
+pub fn measurement_round(log: &Log, cfg: &Config) -> Result<(Round, Config), Error> {
+    let mut kept: Vec<Kept> = Vec::with_capacity(log.sightings.len());
+    let run = Config {
+        smooth: true,
+        ..*cfg
+    };
+    replay(log, &run, |s: &Step| {
+        if let (EventKind::Sighting { sighting, .. }, Some(p), Some(c)) =
+            (s.kind, s.smoothed, s.smoothed_calibration)
+        {
+            let mut state = SVector::<f64, STATE>::zeros();
+            for i in 0..3 {
+                state[i] = p.x[i];
+            }
+            for i in 0..4 {
+                state[3 + i] = c[i];
+            }
+            kept.push(Kept {
+                time: s.time,
+                landmark: sighting.landmark,
+                range: sighting.range,
+                bearing: sighting.bearing,
+                state,
+                covariance: p.p,
+            });
+        }
+    })?;
+    let mut ranges = Vec::with_capacity(kept.len());
+    let mut bearings = Vec::with_capacity(kept.len());
+    let mut hph = [0.0, 0.0];
+    for k in &kept {
+        let Some(l) = log.landmark(k.landmark) else {
+            continue;
+        };
+        let model = CalibratedRangeBearing {
+            inner: RangeBearing::new(
+                Vector2::new(l.x, l.y),
+                Vector2::new(log.sensor.x, log.sensor.y),
+                1.0,
+                1.0,
+            ),
+            yaw: log.sensor.yaw,
+        };
+        let Some(z) = model.h(&k.state) else { continue };
+        let h = model
+            .jacobian(&k.state)
+            .fixed_view::<2, 3>(0, 0)
+            .into_owned();
+        let s = h * k.covariance * h.transpose();
+        hph[0] += s[(0, 0)];
+        hph[1] += s[(1, 1)];
+        ranges.push((k.landmark, k.time, k.range - z[0]));
+        bearings.push((k.landmark, k.time, wrap_angle(k.bearing - z[1])));
+    }
+    let n = ranges.len().max(1) as f64;
+    let range_spread =
+        robust_spread(ranges.iter().map(|r| r.2).collect()).hypot((hph[0] / n).sqrt());
+    let bearing_spread =
+        robust_spread(bearings.iter().map(|r| r.2).collect()).hypot((hph[1] / n).sqrt());
+    let range_tau = batch_tau(&ranges, range_spread);
+    let bearing_tau = batch_tau(&bearings, bearing_spread);
+    let mut next = *cfg;
+    let sr = range_spread * range_tau.sqrt();
+    let sb = bearing_spread * bearing_tau.sqrt();
+    if sr.is_finite() && sr > 0.0 {
+        next.sigma_range = sr;
+    }
+    if sb.is_finite() && sb > 0.0 {
+        next.sigma_bearing = sb;
+    }
+    Ok((
+        Round {
+            config: *cfg,
+            range_spread,
+            range_tau,
+            bearing_spread,
+            bearing_tau,
+        },
+        next,
+    ))
+}
+
+/// The innovation negative log-likelihood of a filter-only replay.
+fn nll(log: &Log, cfg: &Config) -> Result<f64, Error> {
+    let run = Config {
+        smooth: false,
+        ..*cfg
+    };
+    Ok(replay(log, &run, |_| {})?.innovation_nll)
+}
+
+/// The grid point of smallest NLL, and the whole grid's `(value, NLL)`.
+fn grid_minimum(
+    grid: &[f64],
+    mut objective: impl FnMut(f64) -> Result<f64, Error>,
+) -> Result<(f64, Vec<(f64, f64)>), Error> {
+    let mut tried = Vec::with_capacity(grid.len());
+    for &g in grid {
+        tried.push((g, objective(g)?));
+    }
+    let best = tried
+        .iter()
+        .filter(|t| t.1.is_finite())
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or(grid[0], |t| t.0);
+    Ok((best, tried))
+}
+
+/// Estimates the noise and the odometry delay of `log`, starting from
+/// `start` (see the module documentation).
+///
+/// # Errors
+/// The replay's errors.
+pub fn estimate(log: &Log, start: &Config) -> Result<Estimate, Error> {
+    let mut rounds = Vec::new();
+    let (r, mut cfg) = measurement_round(log, start)?;
+    rounds.push(r);
+    let (delay, delays) = grid_minimum(&DELAYS, |d| {
+        nll(
+            log,
+            &Config {
+                odometry_delay: d,
+                ..cfg
+            },
+        )
+    })?;
+    cfg.odometry_delay = delay;
+    let (r, next) = measurement_round(log, &cfg)?;
+    rounds.push(r);
+    cfg = next;
+    let (factor, q_factors) = grid_minimum(&Q_FACTORS, |k| {
+        nll(
+            log,
+            &Config {
+                q_v: cfg.q_v * k,
+                q_omega: cfg.q_omega * k,
+                ..cfg
+            },
+        )
+    })?;
+    cfg.q_v *= factor;
+    cfg.q_omega *= factor;
+    let (r, next) = measurement_round(log, &cfg)?;
+    rounds.push(r);
+    cfg = next;
+    Ok(Estimate {
+        config: Config {
+            smooth: start.smooth,
+            ..cfg
+        },
+        rounds,
+        delays,
+        q_factors,
+    })
+}
+
+/// The odometry delay of `log` alone (the first step of [`estimate`]):
+/// the delay of [`DELAYS`] of smallest innovation NLL with `cfg`'s noise.
+///
+/// # Errors
+/// The replay's errors.
+pub fn estimate_delay(log: &Log, cfg: &Config) -> Result<(f64, Vec<(f64, f64)>), Error> {
+    grid_minimum(&DELAYS, |d| {
+        nll(
+            log,
+            &Config {
+                odometry_delay: d,
+                ..*cfg
+            },
+        )
+    })
+}
