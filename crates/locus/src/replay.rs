@@ -105,6 +105,20 @@ struct Common {
     /// Gaussian sightings: no Student-t weighting (the gate alone).
     #[arg(long)]
     no_robust: bool,
+    /// How long after an odometry record the robot moves as it says, s.
+    /// Default: estimated from the log (the delay of smallest innovation
+    /// likelihood on a grid from 0 to 0.4 s).
+    #[arg(long)]
+    odometry_delay: Option<f64>,
+    /// Also estimate the noise from the log (EM over the smoother and
+    /// innovation likelihood, no ground truth; see docs/replay.md: more
+    /// accurate on MRCLAM, but over-confident). Noise flags still win.
+    #[arg(long)]
+    estimate_noise: bool,
+    /// Estimate nothing: the flags, the log's noise records and the
+    /// defaults as they are (odometry delay 0 unless given).
+    #[arg(long, conflicts_with = "estimate_noise")]
+    no_estimate: bool,
     /// Also run the Rauch-Tung-Striebel smoother over the whole log: its
     /// accuracy, 3-sigma shares and NEES beside the filter's (table and
     /// metrics.json).
@@ -164,7 +178,7 @@ pub fn run(args: &Args) -> Result<()> {
         }
         Source::Csv { file, common } => (Log::locus_csv(file)?, common),
     };
-    let cfg = common.config(&log);
+    let (cfg, estimated) = calibrate(&log, common)?;
     let slug: String = log
         .name
         .chars()
@@ -174,7 +188,59 @@ pub fn run(args: &Args) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("out/replay-{slug}")));
-    execute(&log, &cfg, common, &out)
+    execute(&log, &cfg, common, &out, &estimated)
+}
+
+/// The replay's settings: [`Common::config`], then what is estimated from
+/// the log (printed): the odometry delay unless given or `--no-estimate`,
+/// the noise with `--estimate-noise` (flags still win).
+fn calibrate(log: &Log, common: &Common) -> Result<(Config, String)> {
+    let mut cfg = common.config(log);
+    if let Some(d) = common.odometry_delay {
+        cfg.odometry_delay = d;
+    }
+    if common.no_estimate {
+        cfg.validate().context("invalid setting")?;
+        return Ok((cfg, String::new()));
+    }
+    cfg.validate().context("invalid setting")?;
+    let mut t = with_header(["estimated from the log [unit]", "value"]);
+    if common.estimate_noise {
+        let e = locus_replay::noise::estimate(log, &cfg)
+            .with_context(|| format!("estimating the noise of {}", log.name))?;
+        let c = e.config;
+        let keep = |flag: Option<f64>, estimated: f64| flag.unwrap_or(estimated);
+        cfg.q_v = keep(common.q_v, c.q_v);
+        cfg.q_omega = keep(common.q_omega, c.q_omega);
+        cfg.sigma_range = keep(common.sigma_range, c.sigma_range);
+        cfg.sigma_bearing = keep(common.sigma_bearing, c.sigma_bearing);
+        for (k, v) in [
+            ("q_v [m^2/s]", c.q_v),
+            ("q_omega [rad^2/s]", c.q_omega),
+            ("sigma_range [m]", c.sigma_range),
+            ("sigma_bearing [rad]", c.sigma_bearing),
+        ] {
+            t.add_row(vec![k.to_string(), format!("{v:.5}")]);
+        }
+        if common.odometry_delay.is_none() {
+            cfg.odometry_delay = c.odometry_delay;
+            t.add_row(vec![
+                "odometry delay [s]".to_string(),
+                format!("{:.2}", c.odometry_delay),
+            ]);
+        }
+    } else if common.odometry_delay.is_none() {
+        let (d, _) = locus_replay::noise::estimate_delay(log, &cfg)
+            .with_context(|| format!("estimating the odometry delay of {}", log.name))?;
+        cfg.odometry_delay = d;
+        t.add_row(vec!["odometry delay [s]".to_string(), format!("{d:.2}")]);
+    }
+    let text = if t.is_empty() {
+        String::new()
+    } else {
+        format!("{t}\n")
+    };
+    Ok((cfg, text))
 }
 
 /// The landmarks as crosses of 0.3 m for the map.
@@ -191,7 +257,7 @@ fn crosses(log: &Log) -> Vec<Segment<f64>> {
         .collect()
 }
 
-fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path) -> Result<()> {
+fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str) -> Result<()> {
     fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let csv_path = out.join("log.csv");
     let file =
@@ -274,6 +340,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path) -> Result<()> {
     );
     text.push_str(&crate::table::summary(&info, &report.summary));
     text.push_str(&format!("{}\n", honesty_table(&report)));
+    text.push_str(estimated);
     text.push_str(&format!("{}\n", calibration_table(&report)));
     text.push_str(&format!("{}\n", counts_table(cfg, &report)));
     text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
@@ -425,6 +492,8 @@ struct ReplayMetrics {
     calibration: [(f64, f64); 4],
     /// The smoother's summary (with `--smooth`).
     smoothed: Option<locus_eval::Summary>,
+    /// The odometry delay replayed with, s.
+    odometry_delay_s: f64,
     events: usize,
     compared: usize,
     sightings: usize,
@@ -450,6 +519,7 @@ impl ReplayMetrics {
             sigma_bearing_rad: cfg.sigma_bearing,
             calibration: r.calibration,
             smoothed: r.smoothed,
+            odometry_delay_s: cfg.odometry_delay,
             events: r.steps,
             compared: r.compared,
             sightings: r.sightings,

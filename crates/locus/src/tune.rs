@@ -1,12 +1,18 @@
 //! `locus tune DIR` (an MRCLAM dataset): estimates the replay's noise (Q as the power
 //! spectral densities `q_v`, `q_omega`; R as the range and bearing standard
-//! deviations) and the odometry scale factors of `v` and `omega` by
-//! minimising the innovations' negative log-likelihood
-//! (`locus_replay::Report::innovation_nll`, summed over the tuning robots)
-//! with argmin's Nelder-Mead, then reports every robot with the default
-//! and the tuned values against ground truth. With `--objective truth` the
-//! score is instead the summed position RMSE against the ground truth
-//! (tuning *on* the truth, for comparison).
+//! deviations) and the odometry delay from the tuning robots' logs alone,
+//! then reports every robot with the default and the estimated values
+//! against ground truth.
+//!
+//! * `--objective em` (the default): `locus_replay::noise::estimate` on each
+//!   tuning robot (expectation-maximisation over the smoother for R,
+//!   innovation likelihood for Q and the delay; no ground truth), combined
+//!   by the median of each value over the robots.
+//! * `--objective nll`: argmin's Nelder-Mead on the innovations' negative
+//!   log-likelihood (`locus_replay::Report::innovation_nll`, summed over
+//!   the tuning robots) over the noise and the initial scale factors.
+//! * `--objective truth`: the same search on the summed position RMSE
+//!   against the ground truth (tuning *on* the truth, for comparison).
 
 use std::path::PathBuf;
 
@@ -33,10 +39,12 @@ pub struct Args {
     /// Robots reported with the tuned values but not tuned on.
     #[arg(long, value_delimiter = ',', default_values_t = [4u32, 5])]
     held_out: Vec<u32>,
-    /// What to minimise: `nll`, the innovations' negative log-likelihood
-    /// (no ground truth needed), or `truth`, the summed position RMSE
-    /// against the ground truth.
-    #[arg(long, value_enum, default_value_t = Objective::Nll)]
+    /// How to estimate: `em`, the replay's estimate from the logs alone
+    /// (EM over the smoother and innovation likelihood); `nll`, Nelder-Mead
+    /// on the innovations' negative log-likelihood (no ground truth
+    /// needed); `truth`, Nelder-Mead on the summed position RMSE against
+    /// the ground truth.
+    #[arg(long, value_enum, default_value_t = Objective::Em)]
     objective: Objective,
     /// Nelder-Mead iterations at most.
     #[arg(long, default_value_t = 150)]
@@ -46,6 +54,8 @@ pub struct Args {
 /// The score `locus tune` minimises.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 enum Objective {
+    /// `locus_replay::noise::estimate` on each robot, medians combined.
+    Em,
     /// Innovations' negative log-likelihood.
     Nll,
     /// Position RMSE against the ground truth.
@@ -101,7 +111,7 @@ impl CostFunction for Problem<'_> {
         for log in self.logs {
             let r = replay(log, &cfg, |_| {})?;
             sum += match self.objective {
-                Objective::Nll => r.innovation_nll,
+                Objective::Nll | Objective::Em => r.innovation_nll,
                 Objective::Truth => r.summary.ekf_position_rmse,
             };
         }
@@ -127,47 +137,15 @@ pub fn run(args: &Args) -> Result<()> {
         return Err(anyhow!("no robot to tune on"));
     }
     let start = Config::default();
-    let p0 = to_params(&start);
-    // Initial simplex: the default and one vertex per parameter, each
-    // moved by a factor e^0.5 (noises) or by 5 % (scales).
-    let mut simplex = vec![p0.clone()];
-    for i in 0..p0.len() {
-        let mut v = p0.clone();
-        v[i] += if i < 4 { 0.5 } else { 0.05 };
-        simplex.push(v);
-    }
-    let bar = progress_bar(
-        args.max_iters * 2 + 7,
-        "{pos} evaluations, {elapsed} elapsed",
-    )?;
-    let solver = NelderMead::new(simplex)
-        .with_sd_tolerance(1e-3)
-        .map_err(|e| anyhow!("Nelder-Mead: {e}"))?;
-    let result = Executor::new(
-        Problem {
-            logs: &tune_logs,
-            bar: &bar,
-            objective: args.objective,
-        },
-        solver,
-    )
-    .configure(|s| s.max_iters(args.max_iters))
-    .run()
-    .map_err(|e| anyhow!("Nelder-Mead: {e}"))?;
-    bar.finish_and_clear();
-    let state = result.state();
-    let best = state
-        .get_best_param()
-        .ok_or_else(|| anyhow!("Nelder-Mead returned no parameters"))?;
-    let tuned = from_params(best);
-
+    let (tuned, how) = match args.objective {
+        Objective::Em => estimate_on(&tune_logs, &start)?,
+        Objective::Nll | Objective::Truth => nelder_mead(args, &tune_logs, &start)?,
+    };
     let mut text = format!(
-        "locus tune {}: objective {:?}, tuned on robots {:?} ({} Nelder-Mead iterations, {} evaluations), held out {:?}\n",
+        "locus tune {}: objective {:?}, tuned on robots {:?} ({how}), held out {:?}\n",
         dataset.dir().display(),
         args.objective,
         args.tune_on,
-        state.get_iter(),
-        bar.position(),
         args.held_out
     );
     let mut values = with_header(["parameter [unit]", "default", "tuned"]);
@@ -194,6 +172,11 @@ pub fn run(args: &Args) -> Result<()> {
             start.calibration.initial[1],
             tuned.calibration.initial[1],
         ),
+        (
+            "odometry delay [s]",
+            start.odometry_delay,
+            tuned.odometry_delay,
+        ),
     ];
     for (k, a, b) in rows {
         values.add_row(vec![k.to_string(), format!("{a:.5}"), format!("{b:.5}")]);
@@ -207,6 +190,7 @@ pub fn run(args: &Args) -> Result<()> {
         "EKF heading RMSE default / tuned [deg]",
         "odometry position RMSE default / tuned [m]",
         "gated default / tuned [%]",
+        "worst inside 3 sigma, x/y/theta, default / tuned [%]",
         "innovation NLL default / tuned",
     ]);
     let all = args
@@ -242,9 +226,102 @@ pub fn run(args: &Args) -> Result<()> {
                 100.0 * a.gated_share(),
                 100.0 * b.gated_share()
             ),
+            format!(
+                "{:.1} / {:.1}",
+                100.0 * worst(&sa.within_3_sigma),
+                100.0 * worst(&sb.within_3_sigma)
+            ),
             format!("{:.0} / {:.0}", a.innovation_nll, b.innovation_nll),
         ]);
     }
     text.push_str(&format!("{table}\n"));
     print_out(&text)
+}
+
+/// The smallest of the 3-sigma shares (NaN if any is).
+fn worst(shares: &[f64; 3]) -> f64 {
+    shares.iter().copied().fold(f64::INFINITY, f64::min)
+}
+
+/// The median of `values` (the upper one of an even count).
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// `locus_replay::noise::estimate` on each log from `start`, combined by
+/// the median of each estimated value; and how it was reached.
+fn estimate_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
+    let bar = progress_bar(
+        logs.len() as u64,
+        "{pos}/{len} logs estimated, {elapsed} elapsed",
+    )?;
+    let mut each = Vec::with_capacity(logs.len());
+    for log in logs {
+        let e = locus_replay::noise::estimate(log, start)
+            .with_context(|| format!("estimating the noise of {}", log.name))?;
+        each.push(e.config);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let pick = |f: fn(&Config) -> f64| median(each.iter().map(f).collect());
+    let tuned = Config {
+        q_v: pick(|c| c.q_v),
+        q_omega: pick(|c| c.q_omega),
+        sigma_range: pick(|c| c.sigma_range),
+        sigma_bearing: pick(|c| c.sigma_bearing),
+        odometry_delay: pick(|c| c.odometry_delay),
+        ..*start
+    };
+    Ok((
+        tuned,
+        "EM over the smoother and innovation likelihood, each robot; medians".to_string(),
+    ))
+}
+
+/// Nelder-Mead on `args.objective` over the noise and the initial scale
+/// factors, from `start`; and how it was reached.
+fn nelder_mead(args: &Args, tune_logs: &[Log], start: &Config) -> Result<(Config, String)> {
+    let p0 = to_params(start);
+    // Initial simplex: the default and one vertex per parameter, each
+    // moved by a factor e^0.5 (noises) or by 5 % (scales).
+    let mut simplex = vec![p0.clone()];
+    for i in 0..p0.len() {
+        let mut v = p0.clone();
+        v[i] += if i < 4 { 0.5 } else { 0.05 };
+        simplex.push(v);
+    }
+    let bar = progress_bar(
+        args.max_iters * 2 + 7,
+        "{pos} evaluations, {elapsed} elapsed",
+    )?;
+    let solver = NelderMead::new(simplex)
+        .with_sd_tolerance(1e-3)
+        .map_err(|e| anyhow!("Nelder-Mead: {e}"))?;
+    let result = Executor::new(
+        Problem {
+            logs: tune_logs,
+            bar: &bar,
+            objective: args.objective,
+        },
+        solver,
+    )
+    .configure(|s| s.max_iters(args.max_iters))
+    .run()
+    .map_err(|e| anyhow!("Nelder-Mead: {e}"))?;
+    bar.finish_and_clear();
+    let state = result.state();
+    let best = state
+        .get_best_param()
+        .ok_or_else(|| anyhow!("Nelder-Mead returned no parameters"))?;
+    let tuned = from_params(best);
+
+    Ok((
+        tuned,
+        format!(
+            "{} Nelder-Mead iterations, {} evaluations",
+            state.get_iter(),
+            bar.position()
+        ),
+    ))
 }
