@@ -83,41 +83,14 @@ fn push_plain(out: &mut String, mantissa: &str, exponent: i32) {
 /// i.e. `m 2^q = N 5^e 2^(e-1)` for `|x| = m 2^q`, `m` odd, and the odd
 /// `N = 2D + 1`: `q = e - 1` and `m = N 5^e` (or `m 5^-e = N` for `e < 0`),
 /// checked in exact integer arithmetic. Two candidates `10^e` apart can
-/// only both read back to a normal `x` if `10^e` is below its spacing,
-/// 2^-52 of it, so ties need at least 16 significant digits; shorter texts
-/// are not examined.
+/// only both read back to `x` if `10^e` is below its spacing, 2^-52 of a
+/// normal `x`, so `D` has at least 16 digits; with `N < 2^58` and
+/// `m < 2^53`, that leaves `-25 <= e <= 22`, so `-26 <= q <= 21`. Most
+/// computed values have lower bits set (`q` far below -26) and are settled
+/// by that test alone, before `text` is read.
 fn is_tie(x: f64, text: &str) -> bool {
-    let mantissa = text.split_once('e').map_or(text, |(m, _)| m);
-    let exponent: i32 = text
-        .split_once('e')
-        .map_or(0, |(_, e)| e.parse().unwrap_or(0));
-    let mut digits: u128 = 0;
-    let mut significant = 0u32;
-    let mut after_point: i32 = 0;
-    let mut seen_point = false;
-    for b in mantissa.bytes() {
-        match b {
-            b'0'..=b'9' => {
-                // At most 17 significant digits and 22 in all: no overflow.
-                digits = digits * 10 + u128::from(b - b'0');
-                significant += u32::from(digits != 0);
-                after_point += i32::from(seen_point);
-            }
-            b'.' => seen_point = true,
-            _ => {}
-        }
-    }
-    let mut e = exponent - after_point;
-    while digits != 0 && digits % 10 == 0 {
-        digits /= 10;
-        significant -= 1;
-        e += 1;
-    }
-    if significant < 16 {
-        return false;
-    }
     let bits = x.abs().to_bits();
-    let (mut m, mut q) = match bits >> 52 {
+    let (m, q) = match bits >> 52 {
         0 => (bits, -1074),
         biased => (
             (bits & ((1 << 52) - 1)) | (1 << 52),
@@ -127,18 +100,53 @@ fn is_tie(x: f64, text: &str) -> bool {
     if m == 0 {
         return false;
     }
-    q += i32::try_from(m.trailing_zeros()).unwrap_or(0);
-    m >>= m.trailing_zeros();
+    let q = q + i32::try_from(m.trailing_zeros()).unwrap_or(0);
+    let m = u128::from(m >> m.trailing_zeros());
+    if !(-26..=21).contains(&q) {
+        return false;
+    }
+    let (mantissa, exponent) = text.split_once('e').unwrap_or((text, "0"));
+    let exponent: i32 = exponent.parse().unwrap_or(0);
+    // D without its trailing zeros: zeros are held back until a nonzero
+    // digit follows them. A text of this range has at most 23 digits.
+    let mut digits: u128 = 0;
+    let mut significant = 0u32;
+    let mut held_zeros = 0u32;
+    let mut after_point: i32 = 0;
+    let mut seen_point = false;
+    for b in mantissa.bytes() {
+        match b {
+            b'0' => {
+                held_zeros += 1;
+                after_point += i32::from(seen_point);
+            }
+            b'1'..=b'9' => {
+                let started = digits != 0;
+                for _ in 0..held_zeros {
+                    digits *= 10;
+                }
+                digits = digits * 10 + u128::from(b - b'0');
+                significant += 1 + if started { held_zeros } else { 0 };
+                held_zeros = 0;
+                after_point += i32::from(seen_point);
+            }
+            b'.' => seen_point = true,
+            _ => {}
+        }
+    }
+    if significant < 16 {
+        return false;
+    }
+    let e = exponent - after_point + i32::try_from(held_zeros).unwrap_or(0);
     if q != e - 1 {
         return false;
     }
     let n = 2 * digits + 1;
-    let m = u128::from(m);
-    let five = |k: u32| 5u128.checked_pow(k);
+    let five = 5u128.checked_pow(e.unsigned_abs());
     if e >= 0 {
-        five(e.unsigned_abs()).and_then(|p| n.checked_mul(p)) == Some(m)
+        five.and_then(|p| n.checked_mul(p)) == Some(m)
     } else {
-        five(e.unsigned_abs()).and_then(|p| m.checked_mul(p)) == Some(n)
+        five.and_then(|p| m.checked_mul(p)) == Some(n)
     }
 }
 
