@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 #![forbid(unsafe_code)]
 
+pub mod decimal;
 pub mod error;
 pub mod locus_csv;
 pub mod mrclam;

@@ -23,6 +23,7 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::decimal::push_f64;
 use crate::error::{Error, FieldProblem, RecordProblem, Result};
 use crate::mrclam::{Groundtruth, Odometry, TruthPose};
 use crate::noise::NoiseRecords;
@@ -254,38 +255,53 @@ fn existing(path: &Path) -> Result<PathBuf> {
     })
 }
 
-/// Writes a log in this format (the inverse of [`parse`]; numbers in
-/// Rust's shortest round-trip form, so `parse(write(log)) == log`).
+/// Writes a log in this format (the inverse of [`parse`]; numbers as
+/// Rust's `Display` writes them, the shortest form that reads back to the
+/// same value, so `parse(write(log)) == log`).
 #[must_use]
 pub fn write(log: &LocusLog) -> String {
     use core::fmt::Write as _;
-    let mut s = String::from("# Locus log v2 (docs/log-format.md); SI units\n");
+    let lines = 1 + log.landmarks.len() + log.truth.poses().len() + log.odometry.len();
+    let mut s = String::with_capacity(64 * (lines + log.measurements.len()));
+    s.push_str("# Locus log v2 (docs/log-format.md); SI units\n");
     if let Some(m) = log.sensor {
-        let _ = writeln!(s, "sensor,{},{},{}", m.x, m.y, m.yaw);
+        record(&mut s, "sensor", &[m.x, m.y, m.yaw]);
     }
     for (name, value) in log.noise.iter() {
-        let _ = writeln!(s, "noise,{name},{value}");
+        s.push_str("noise,");
+        s.push_str(name);
+        record(&mut s, "", &[value]);
     }
     for l in &log.landmarks {
-        let _ = writeln!(s, "landmark,{},{},{}", l.id, l.x, l.y);
+        let _ = write!(s, "landmark,{}", l.id);
+        record(&mut s, "", &[l.x, l.y]);
     }
     if let Some(p) = log.start {
-        let _ = writeln!(s, "start,{},{},{},{}", p.time, p.x, p.y, p.theta);
+        record(&mut s, "start", &[p.time, p.x, p.y, p.theta]);
     }
     for p in log.truth.poses() {
-        let _ = writeln!(s, "truth,{},{},{},{}", p.time, p.x, p.y, p.theta);
+        record(&mut s, "truth", &[p.time, p.x, p.y, p.theta]);
     }
     for o in &log.odometry {
-        let _ = writeln!(s, "odometry,{},{},{}", o.time, o.v, o.omega);
+        record(&mut s, "odometry", &[o.time, o.v, o.omega]);
     }
     for m in &log.measurements {
-        let _ = writeln!(
-            s,
-            "measurement,{},{},{},{}",
-            m.time, m.id, m.range, m.bearing
-        );
+        s.push_str("measurement,");
+        push_f64(&mut s, m.time);
+        let _ = write!(s, ",{}", m.id);
+        record(&mut s, "", &[m.range, m.bearing]);
     }
     s
+}
+
+/// Appends `head`, then `,value` for each value, then a line end.
+fn record(s: &mut String, head: &str, values: &[f64]) {
+    s.push_str(head);
+    for v in values {
+        s.push(',');
+        push_f64(s, *v);
+    }
+    s.push('\n');
 }
 
 #[cfg(test)]

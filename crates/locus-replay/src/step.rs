@@ -87,49 +87,55 @@ impl Step {
          var_theta_rad2,odo_x_m,odo_y_m,odo_theta_rad,true_x_m,true_y_m,true_theta_rad"
     }
 
-    /// The step as one CSV line (empty fields where not applicable).
+    /// The step as one CSV line (empty fields where not applicable, no line
+    /// end): [`Step::write_csv_row`] into a new `String`.
     #[must_use]
     pub fn csv_row(&self) -> String {
-        let (event, lm, r, b, nis, applied) = match self.kind {
-            EventKind::Odometry { .. } => (
-                "odometry",
-                String::new(),
-                String::new(),
-                String::new(),
-                String::new(),
-                String::new(),
-            ),
+        let mut row = String::with_capacity(400);
+        self.write_csv_row(&mut row);
+        row
+    }
+
+    /// Appends the step to `out` as one CSV line, the columns of
+    /// [`Step::csv_header`] (empty fields where not applicable, no line
+    /// end). Numbers are written as Rust's `Display` writes them (shortest
+    /// round-trip digits, no exponent), by `locus_logs::decimal::push_f64`,
+    /// with no allocation beyond growing `out`; clear and reuse one `String`
+    /// across steps.
+    pub fn write_csv_row(&self, out: &mut String) {
+        use core::fmt::Write as _;
+        use locus_logs::decimal::push_f64;
+        let _ = write!(out, "{},", self.index);
+        push_f64(out, self.time);
+        out.push(',');
+        push_f64(out, self.elapsed);
+        match self.kind {
+            EventKind::Odometry { .. } => out.push_str(",odometry,,,,,"),
             EventKind::Sighting { sighting, outcome } => {
+                let _ = write!(out, ",sighting,{},", sighting.landmark);
+                push_f64(out, sighting.range);
+                out.push(',');
+                push_f64(out, sighting.bearing);
+                out.push(',');
                 let (nis, applied) = match outcome {
                     SightingOutcome::Applied { nis, recovered, .. } => {
-                        (nis.to_string(), if recovered { "recovered" } else { "1" })
+                        (Some(nis), if recovered { "recovered" } else { "1" })
                     }
-                    SightingOutcome::Gated { nis } => (nis.to_string(), "0"),
-                    SightingOutcome::NotInMap => (String::new(), "not-in-map"),
-                    SightingOutcome::NoMeasurement => (String::new(), "no-measurement"),
+                    SightingOutcome::Gated { nis } => (Some(nis), "0"),
+                    SightingOutcome::NotInMap => (None, "not-in-map"),
+                    SightingOutcome::NoMeasurement => (None, "no-measurement"),
                 };
-                (
-                    "sighting",
-                    sighting.landmark.to_string(),
-                    sighting.range.to_string(),
-                    sighting.bearing.to_string(),
-                    nis,
-                    applied.to_string(),
-                )
+                if let Some(nis) = nis {
+                    push_f64(out, nis);
+                }
+                out.push(',');
+                out.push_str(applied);
             }
-        };
+        }
         let x = &self.belief.x;
         let p = &self.belief.p;
         let d = &self.dead_reckoning;
-        let truth = self.truth.map_or_else(
-            || ",,".to_string(),
-            |t| format!("{},{},{}", t.x, t.y, t.theta),
-        );
-        format!(
-            "{},{},{},{event},{lm},{r},{b},{nis},{applied},{},{},{},{},{},{},{},{},{},{},{},{},{truth}",
-            self.index,
-            self.time,
-            self.elapsed,
+        let estimate = [
             x[0],
             x[1],
             x[2],
@@ -141,8 +147,21 @@ impl Step {
             p[(2, 2)],
             d[0],
             d[1],
-            d[2]
-        )
+            d[2],
+        ];
+        for v in estimate {
+            out.push(',');
+            push_f64(out, v);
+        }
+        match self.truth {
+            Some(t) => {
+                for v in [t.x, t.y, t.theta] {
+                    out.push(',');
+                    push_f64(out, v);
+                }
+            }
+            None => out.push_str(",,,"),
+        }
     }
 
     /// The figures `locus run` summarises and draws, if the step has a

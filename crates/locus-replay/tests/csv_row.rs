@@ -1,0 +1,190 @@
+//! `Step::csv_row` / `Step::write_csv_row` give, byte for byte, the row the
+//! `format!`-based writer gave (kept here as the reference), for random
+//! steps of every kind and outcome with any finite numbers.
+
+use locus_core::Belief;
+use locus_core::nalgebra::{Matrix3, Vector3};
+use locus_logs::mrclam::TruthPose;
+use locus_replay::{EventKind, Sighting, SightingOutcome, Step};
+use proptest::prelude::*;
+
+/// The row as the `format!`/`to_string` writer built it.
+fn reference_row(step: &Step) -> String {
+    let (event, lm, r, b, nis, applied) = match step.kind {
+        EventKind::Odometry { .. } => (
+            "odometry",
+            String::new(),
+            String::new(),
+            String::new(),
+            String::new(),
+            String::new(),
+        ),
+        EventKind::Sighting { sighting, outcome } => {
+            let (nis, applied) = match outcome {
+                SightingOutcome::Applied { nis, recovered, .. } => {
+                    (nis.to_string(), if recovered { "recovered" } else { "1" })
+                }
+                SightingOutcome::Gated { nis } => (nis.to_string(), "0"),
+                SightingOutcome::NotInMap => (String::new(), "not-in-map"),
+                SightingOutcome::NoMeasurement => (String::new(), "no-measurement"),
+            };
+            (
+                "sighting",
+                sighting.landmark.to_string(),
+                sighting.range.to_string(),
+                sighting.bearing.to_string(),
+                nis,
+                applied.to_string(),
+            )
+        }
+    };
+    let x = &step.belief.x;
+    let p = &step.belief.p;
+    let d = &step.dead_reckoning;
+    let truth = step.truth.map_or_else(
+        || ",,".to_string(),
+        |t| format!("{},{},{}", t.x, t.y, t.theta),
+    );
+    format!(
+        "{},{},{},{event},{lm},{r},{b},{nis},{applied},{},{},{},{},{},{},{},{},{},{},{},{},{truth}",
+        step.index,
+        step.time,
+        step.elapsed,
+        x[0],
+        x[1],
+        x[2],
+        p[(0, 0)],
+        p[(0, 1)],
+        p[(0, 2)],
+        p[(1, 1)],
+        p[(1, 2)],
+        p[(2, 2)],
+        d[0],
+        d[1],
+        d[2]
+    )
+}
+
+/// Any finite f64 (sign, zeros, subnormals, every exponent), or one of
+/// the figures a replay writes (UNIX times to the millisecond, metres,
+/// small variances).
+fn number() -> impl Strategy<Value = f64> {
+    use proptest::num::f64::{NEGATIVE, NORMAL, POSITIVE, SUBNORMAL, ZERO};
+    prop_oneof![
+        3 => POSITIVE | NEGATIVE | NORMAL | SUBNORMAL | ZERO,
+        1 => (1_248_000_000_000u64..1_249_000_000_000).prop_map(|ms| ms as f64 / 1000.0),
+        1 => -20.0..20.0f64,
+        1 => 1e-12..1e-2f64,
+    ]
+}
+
+fn kind() -> impl Strategy<Value = EventKind> {
+    let outcome = prop_oneof![
+        (number(), any::<bool>()).prop_map(|(nis, recovered)| SightingOutcome::Applied {
+            nis,
+            recovered,
+            weight: 1.0,
+        }),
+        number().prop_map(|nis| SightingOutcome::Gated { nis }),
+        Just(SightingOutcome::NotInMap),
+        Just(SightingOutcome::NoMeasurement),
+    ];
+    let sighting = (number(), any::<u32>(), number(), number()).prop_map(
+        |(time, landmark, range, bearing)| Sighting {
+            time,
+            arrival: time,
+            landmark,
+            range,
+            bearing,
+        },
+    );
+    prop_oneof![
+        (number(), number()).prop_map(|(v, omega)| EventKind::Odometry { v, omega }),
+        (sighting, outcome)
+            .prop_map(|(sighting, outcome)| EventKind::Sighting { sighting, outcome }),
+    ]
+}
+
+fn step() -> impl Strategy<Value = Step> {
+    let numbers = proptest::collection::vec(number(), 17);
+    let truth = proptest::option::of(
+        (number(), number(), number(), number()).prop_map(|(time, x, y, theta)| TruthPose {
+            time,
+            x,
+            y,
+            theta,
+        }),
+    );
+    (any::<usize>(), kind(), numbers, truth).prop_map(|(index, kind, n, truth)| Step {
+        index,
+        time: n[0],
+        elapsed: n[1],
+        kind,
+        belief: Belief::new(
+            Vector3::new(n[2], n[3], n[4]),
+            Matrix3::new(n[5], n[6], n[7], n[6], n[8], n[9], n[7], n[9], n[10]),
+        ),
+        calibration: [1.0, 1.0, 0.0, 0.0],
+        smoothed: None,
+        smoothed_calibration: None,
+        dead_reckoning: [n[11], n[12], n[13]],
+        truth,
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(20_000))]
+
+    #[test]
+    fn rows_are_those_of_the_format_writer(step in step(), head in "[a-z0-9,\n]{0,12}") {
+        let want = reference_row(&step);
+        prop_assert_eq!(&step.csv_row(), &want);
+        // Appended after whatever the buffer holds.
+        let mut out = head.clone();
+        step.write_csv_row(&mut out);
+        prop_assert_eq!(out, format!("{head}{want}"));
+    }
+}
+
+#[test]
+fn rows_have_the_header_s_columns() {
+    let columns = Step::csv_header().split(',').count();
+    let kinds = [
+        EventKind::Odometry { v: 0.1, omega: 0.0 },
+        EventKind::Sighting {
+            sighting: Sighting {
+                time: 1.0,
+                arrival: 1.0,
+                landmark: 7,
+                range: 2.0,
+                bearing: -0.5,
+            },
+            outcome: SightingOutcome::NotInMap,
+        },
+    ];
+    for (kind, truth) in kinds.into_iter().zip([
+        None,
+        Some(TruthPose {
+            time: 1.0,
+            x: 1.0,
+            y: 2.0,
+            theta: 0.5,
+        }),
+    ]) {
+        let step = Step {
+            index: 3,
+            time: 1.0,
+            elapsed: 0.5,
+            kind,
+            belief: Belief::new(Vector3::zeros(), Matrix3::identity()),
+            calibration: [1.0, 1.0, 0.0, 0.0],
+            smoothed: None,
+            smoothed_calibration: None,
+            dead_reckoning: [0.0; 3],
+            truth,
+        };
+        let row = step.csv_row();
+        assert_eq!(row.split(',').count(), columns, "{row}");
+        assert_eq!(row, reference_row(&step));
+    }
+}
