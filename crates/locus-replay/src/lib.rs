@@ -62,7 +62,7 @@ use locus_core::{
     Update, wrap_angle,
 };
 use locus_eval::Tally;
-use locus_logs::mrclam::Odometry;
+use locus_logs::mrclam::{Odometry, TruthCursor};
 use locus_models::calibrated_range_bearing::CalibratedRangeBearing;
 use locus_models::calibrated_unicycle::{BEARING_BIAS, OMEGA_BIAS, OMEGA_SCALE, V_SCALE};
 use locus_models::range_bearing::RangeBearing;
@@ -308,6 +308,8 @@ struct Engine<'a, F: FnMut(&Step)> {
     /// With [`Config::smooth`]: the final steps and what the smoother
     /// needs, until the backward pass.
     held: Vec<(Step, smoother::Node)>,
+    /// Ground-truth lookups in (mostly) increasing time.
+    truth: TruthCursor<'a>,
     sink: F,
 }
 
@@ -384,7 +386,7 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             smoothed: None,
             smoothed_calibration: None,
             dead_reckoning: [d[0], d[1], d[2]],
-            truth: self.log.truth.pose_at(time, self.cfg.truth_max_gap),
+            truth: self.truth.pose_at(time, self.cfg.truth_max_gap),
         };
         self.next_index += 1;
         self.report.steps += 1;
@@ -552,6 +554,7 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
             smoothed_calibration: None,
         },
         held: Vec::new(),
+        truth: log.truth.cursor(),
         sink,
     };
     let mut odometry = log.odometry.iter().peekable();

@@ -270,6 +270,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
     let bar = progress_bar(total, "{pos}/{len} events, {elapsed} elapsed")?;
     let mut samples: Vec<Sample> = Vec::new();
     let mut io_error: Option<std::io::Error> = None;
+    let mut row = String::with_capacity(512);
     let report = replay(log, cfg, |step| {
         if step.index % 4096 == 0 {
             bar.set_position(step.index as u64);
@@ -279,10 +280,13 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
         {
             samples.push(s);
         }
-        if io_error.is_none()
-            && let Err(e) = writeln!(csv, "{}", step.csv_row())
-        {
-            io_error = Some(e);
+        if io_error.is_none() {
+            row.clear();
+            step.write_csv_row(&mut row);
+            row.push('\n');
+            if let Err(e) = csv.write_all(row.as_bytes()) {
+                io_error = Some(e);
+            }
         }
     })
     .with_context(|| format!("replaying {}", log.name))?;
