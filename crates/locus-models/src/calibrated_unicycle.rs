@@ -136,6 +136,66 @@ impl<T: Scalar> MotionModel<T, 7, 6> for CalibratedUnicycle<T> {
         u.v.is_finite() && u.omega.is_finite() && u.dt.is_finite() && u.dt > T::zero()
     }
 
+    /// `A P A^T + W Q W^T` with `A`'s structure: the identity except the
+    /// pose rows, which reach only heading and calibration columns; `W`
+    /// maps the two velocity noises into the pose and each random walk
+    /// onto its own state. About a sixth of the dense products' work.
+    #[inline]
+    fn propagate(
+        &self,
+        x: &SVector<T, 7>,
+        u: &Velocities<T>,
+        p: &SMatrix<T, 7, 7>,
+    ) -> (SVector<T, 7>, SMatrix<T, 7, 7>) {
+        let (fx, a, w) = self.linearize(x, u);
+        // B = A P: rows 0-2 are P's plus their off-identity terms.
+        let mut b = *p;
+        for r in 0..3 {
+            for c in 0..7 {
+                let mut v = p[(r, c)];
+                for k in 2..=OMEGA_BIAS {
+                    if k != r {
+                        v += a[(r, k)] * p[(k, c)];
+                    }
+                }
+                b[(r, c)] = v;
+            }
+        }
+        // P- = B A^T: columns 0-2 likewise; then symmetric by construction
+        // of the lower triangle mirrored.
+        let mut out = b;
+        for r in 0..7 {
+            for c in 0..3 {
+                let mut v = b[(r, c)];
+                for k in 2..=OMEGA_BIAS {
+                    if k != c {
+                        v += b[(r, k)] * a[(c, k)];
+                    }
+                }
+                out[(r, c)] = v;
+            }
+        }
+        // W Q W^T: the velocity noises into the pose block, the walks on
+        // the calibration diagonal.
+        let q = self.noise_cov(u);
+        for r in 0..3 {
+            for c in 0..3 {
+                out[(r, c)] +=
+                    w[(r, 0)] * q[(0, 0)] * w[(c, 0)] + w[(r, 1)] * q[(1, 1)] * w[(c, 1)];
+            }
+        }
+        for i in 0..4 {
+            out[(V_SCALE + i, V_SCALE + i)] += q[(2 + i, 2 + i)];
+        }
+        // Exactly symmetric: the upper triangle from the lower.
+        for r in 0..7 {
+            for c in (r + 1)..7 {
+                out[(r, c)] = out[(c, r)];
+            }
+        }
+        (fx, out)
+    }
+
     fn state_residual(&self, a: &SVector<T, 7>, b: &SVector<T, 7>) -> SVector<T, 7> {
         let mut d = a - b;
         d[2] = wrap_angle(d[2]);

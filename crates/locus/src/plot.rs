@@ -20,6 +20,15 @@ const SIZE: (u32, u32) = (1000, 700);
 
 /// Side of the square map picture (pixels).
 const MAP_SIDE: u32 = 800;
+/// Width of the band right of the map that holds its legend, pixels (the
+/// legend never covers the data).
+const MAP_LEGEND: u32 = 380;
+/// Covariance ellipses drawn on the map at most (over long runs they are
+/// spread out further than [`ELLIPSE_EVERY`]).
+const MAX_ELLIPSES: f64 = 25.0;
+/// An ellipse whose semi-major axis exceeds this share of the map's side is
+/// not drawn: it would cover the map and says only "lost".
+const ELLIPSE_MAX_SHARE: f64 = 0.1;
 
 /// At most this many points per plotted series (the samples are thinned
 /// evenly; the SVGs stay small).
@@ -137,6 +146,8 @@ fn draw_map<DB: DrawingBackend>(
     sigma: f64,
 ) -> Result<()> {
     root.fill(&WHITE).map_err(err)?;
+    let (area, band) = root.split_horizontally(MAP_SIDE);
+    let mut legend: Vec<(String, ShapeStyle)> = Vec::new();
     let mut xs: Vec<f64> = Vec::new();
     let mut ys: Vec<f64> = Vec::new();
     for w in walls {
@@ -165,7 +176,7 @@ fn draw_map<DB: DrawingBackend>(
     // Equal scales on both axes, 10 % margin.
     let side = (x1 - x0).max(y1 - y0).max(0.1) * 1.1;
     let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
-    let mut chart = ChartBuilder::on(root)
+    let mut chart = ChartBuilder::on(&area)
         .caption(title, (FAMILY, 20))
         .margin(15)
         .x_label_area_size(45)
@@ -186,9 +197,9 @@ fn draw_map<DB: DrawingBackend>(
     let wall_style = ShapeStyle::from(&BLACK).stroke_width(4);
     for (i, w) in walls.iter().enumerate() {
         let series = LineSeries::new([(w.a[0], w.a[1]), (w.b[0], w.b[1])], wall_style);
-        let drawn = chart.draw_series(series).map_err(err)?;
+        chart.draw_series(series).map_err(err)?;
         if i == 0 {
-            drawn.label(walls_label).legend(legend_line(wall_style));
+            legend.push((walls_label.to_string(), wall_style));
         }
     }
     let truth = RGBColor(0, 150, 0);
@@ -200,32 +211,44 @@ fn draw_map<DB: DrawingBackend>(
             thinned(samples).map(|s| (s.truth[0], s.truth[1])),
             truth.stroke_width(2),
         ))
-        .map_err(err)?
-        .label("true path")
-        .legend(legend_line(truth.stroke_width(2)));
+        .map_err(err)?;
+    legend.push(("true path".to_string(), truth.stroke_width(2)));
     chart
         .draw_series(LineSeries::new(
             thinned(samples).map(|s| (s.estimate[0], s.estimate[1])),
             est.stroke_width(1),
         ))
-        .map_err(err)?
-        .label("EKF estimate")
-        .legend(legend_line(est.stroke_width(2)));
+        .map_err(err)?;
+    legend.push(("EKF estimate".to_string(), est.stroke_width(2)));
     if samples.iter().any(|s| s.odometry.is_some()) {
         chart
             .draw_series(LineSeries::new(
                 thinned(samples).filter_map(|s| s.odometry.map(|(p, _)| (p[0], p[1]))),
                 odo.stroke_width(1),
             ))
-            .map_err(err)?
-            .label("odometry alone")
-            .legend(legend_line(odo.stroke_width(2)));
+            .map_err(err)?;
+        legend.push(("odometry alone".to_string(), odo.stroke_width(2)));
     }
+    let span = match (samples.first(), samples.last()) {
+        (Some(a), Some(b)) => b.time - a.time,
+        _ => 0.0,
+    };
+    let every = ELLIPSE_EVERY.max(span / MAX_ELLIPSES);
+    let widest = ELLIPSE_MAX_SHARE * side;
     let mut next = 0.0;
     let mut ellipses = Vec::new();
+    let mut too_wide = 0usize;
     for s in samples {
         if s.time + 1e-9 >= next {
+            next = s.time + every;
             let p = &s.covariance;
+            // Semi-major axis of the k-sigma ellipse: k sqrt(largest eigenvalue).
+            let half = (p[0][0] - p[1][1]) / 2.0;
+            let largest = (p[0][0] + p[1][1]) / 2.0 + half.hypot(p[0][1]);
+            if sigma * largest.max(0.0).sqrt() > widest {
+                too_wide += 1;
+                continue;
+            }
             ellipses.push(ellipse(
                 [s.estimate[0], s.estimate[1]],
                 p[0][0],
@@ -233,24 +256,49 @@ fn draw_map<DB: DrawingBackend>(
                 p[1][1],
                 sigma,
             ));
-            next = s.time + ELLIPSE_EVERY;
         }
     }
-    let label = format!(
-        "{sigma}-sigma ellipse of x-y (every {ELLIPSE_EVERY:.0} s, true scale), {:.1} %",
-        100.0 * ellipse_probability(sigma)
-    );
     chart
         .draw_series(
             ellipses
                 .into_iter()
-                .map(|e| PathElement::new(e, ellipse_color.stroke_width(2))),
+                .map(|e| PathElement::new(e, ellipse_color.stroke_width(1))),
         )
-        .map_err(err)?
-        .label(label)
-        .legend(legend_line(ellipse_color.stroke_width(2)));
-    draw_legend(&mut chart, 14, SeriesLabelPosition::MiddleMiddle)?;
+        .map_err(err)?;
+    legend.push((
+        format!(
+            "{sigma}-sigma ellipses of x-y ({:.1} %),",
+            100.0 * ellipse_probability(sigma)
+        ),
+        ellipse_color.stroke_width(2),
+    ));
+    legend.push((
+        format!("  every {every:.0} s, true scale;"),
+        ShapeStyle::from(&WHITE),
+    ));
+    legend.push((
+        format!("  {too_wide} wider than {widest:.2} m not drawn"),
+        ShapeStyle::from(&WHITE),
+    ));
+    draw_side_legend(&band, &legend)?;
     root.present().map_err(err)?;
+    Ok(())
+}
+
+/// A legend in its own area (beside a chart, off its data): a short line
+/// in each entry's style and its label.
+fn draw_side_legend<DB: DrawingBackend>(
+    band: &DrawingArea<DB, Shift>,
+    entries: &[(String, ShapeStyle)],
+) -> Result<()> {
+    for (i, (label, style)) in entries.iter().enumerate() {
+        #[allow(clippy::cast_possible_truncation, clippy::cast_possible_wrap)]
+        let y = 70 + 26 * i as i32;
+        band.draw(&PathElement::new(vec![(10, y), (45, y)], *style))
+            .map_err(err)?;
+        band.draw(&Text::new(label.as_str(), (55, y - 8), (FAMILY, 15)))
+            .map_err(err)?;
+    }
     Ok(())
 }
 
@@ -442,7 +490,7 @@ pub fn write_all(
         let map_title = format!("{title}: paths and covariance");
         let err_title = format!("{title}: EKF errors and +-3 sigma");
         let cov_title = format!("{title}: EKF variances");
-        let side = (MAP_SIDE, MAP_SIDE);
+        let side = (MAP_SIDE + MAP_LEGEND, MAP_SIDE);
         on_backend!(
             ext,
             &map,
