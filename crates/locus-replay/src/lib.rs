@@ -305,9 +305,10 @@ struct Engine<'a, F: FnMut(&Step)> {
     next_index: usize,
     tally: Tally,
     report: Report,
-    /// With [`Config::smooth`]: the final steps and what the smoother
-    /// needs, until the backward pass.
-    held: Vec<(Step, smoother::Node)>,
+    /// With [`Config::smooth`]: the final steps, until the backward pass.
+    held: Vec<Step>,
+    /// With [`Config::smooth`]: what the smoother needs of each held step.
+    nodes: Vec<smoother::Node>,
     /// Ground-truth lookups in (mostly) increasing time.
     truth: TruthCursor<'a>,
     sink: F,
@@ -395,15 +396,13 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             self.tally.push(&sample);
         }
         if self.cfg.smooth {
-            self.held.push((
-                step,
-                smoother::Node {
-                    posterior: after.belief,
-                    time,
-                    v: after.extra.v,
-                    omega: after.extra.omega,
-                },
-            ));
+            self.held.push(step);
+            self.nodes.push(smoother::Node {
+                posterior: after.belief,
+                time,
+                v: after.extra.v,
+                omega: after.extra.omega,
+            });
         } else {
             (self.sink)(&step);
         }
@@ -415,14 +414,14 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
         if !self.cfg.smooth {
             return Ok(());
         }
-        let nodes: Vec<smoother::Node> = self.held.iter().map(|h| h.1).collect();
-        let smoothed =
-            smoother::rts(&self.cfg.motion_model(), &nodes).map_err(|index| Error::Smoother {
-                time: self.held[index].0.time,
-            })?;
+        let smoothed = smoother::rts(&self.cfg.motion_model(), &self.nodes).map_err(|index| {
+            Error::Smoother {
+                time: self.held[index].time,
+            }
+        })?;
         let mut tally =
             Tally::new(3).map_err(|_| Error::InvalidConfig("NEES degrees of freedom"))?;
-        for ((step, _), s) in self.held.iter_mut().zip(&smoothed) {
+        for (step, s) in self.held.iter_mut().zip(&smoothed) {
             let pose = pose_belief(s);
             step.smoothed = Some(pose);
             step.smoothed_calibration = Some(calibration_of(s).map(|c| c.0));
@@ -436,6 +435,7 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             self.report.smoothed_calibration = Some(calibration_of(last));
         }
         self.held = Vec::new();
+        self.nodes = Vec::new();
         Ok(())
     }
 }
@@ -521,6 +521,7 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
             dead: pose,
         },
     );
+    let events = log.odometry.len() + log.sightings.len();
     let mut engine = Engine {
         cfg: *cfg,
         log,
@@ -553,7 +554,8 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
             calibration: calibration_of(&belief),
             smoothed_calibration: None,
         },
-        held: Vec::new(),
+        held: Vec::with_capacity(if cfg.smooth { events } else { 0 }),
+        nodes: Vec::with_capacity(if cfg.smooth { events } else { 0 }),
         truth: log.truth.cursor(),
         sink,
     };

@@ -53,7 +53,12 @@ impl Log {
     /// # Errors
     /// The reader's errors (missing file, malformed line, no such robot).
     pub fn mrclam(dataset: &Dataset, robot: u32) -> locus_logs::Result<Self> {
-        let split = dataset.sightings(robot)?;
+        // The three files are decoded and parsed side by side.
+        let (split, (odometry, truth)) = rayon::join(
+            || dataset.sightings(robot),
+            || rayon::join(|| dataset.odometry(robot), || dataset.groundtruth(robot)),
+        );
+        let (split, odometry, truth) = (split?, odometry?, truth?);
         let landmarks = dataset
             .landmarks
             .iter()
@@ -81,9 +86,9 @@ impl Log {
         Ok(Self {
             name: format!("{name} robot {robot}"),
             landmarks,
-            odometry: dataset.odometry(robot)?,
+            odometry,
             sightings,
-            truth: dataset.groundtruth(robot)?,
+            truth,
             start: None,
             robot_sightings: split.robots.len(),
             unknown_sightings: split.unknown.len(),

@@ -239,15 +239,18 @@ fn nll(log: &Log, cfg: &Config) -> Result<f64, Error> {
     Ok(replay(log, &run, |_| {})?.innovation_nll)
 }
 
-/// The grid point of smallest NLL, and the whole grid's `(value, NLL)`.
+/// The grid point of smallest NLL, and the whole grid's `(value, NLL)` (in
+/// the grid's order).
 fn grid_minimum(
     grid: &[f64],
-    mut objective: impl FnMut(f64) -> Result<f64, Error>,
+    objective: impl Fn(f64) -> Result<f64, Error> + Sync,
 ) -> Result<(f64, Vec<(f64, f64)>), Error> {
-    let mut tried = Vec::with_capacity(grid.len());
-    for &g in grid {
-        tried.push((g, objective(g)?));
-    }
+    use rayon::prelude::*;
+    // The grid points are independent replays: run side by side.
+    let tried = grid
+        .par_iter()
+        .map(|&g| Ok((g, objective(g)?)))
+        .collect::<Result<Vec<(f64, f64)>, Error>>()?;
     let best = tried
         .iter()
         .filter(|t| t.1.is_finite())

@@ -79,6 +79,12 @@ pub(crate) fn rts(
     };
     let mut out = vec![last.posterior; nodes.len()];
     for k in (0..nodes.len() - 1).rev() {
+        if nodes[k + 1].time == nodes[k].time {
+            // No prediction between them: C = I, the smoothed belief is
+            // the next one's.
+            out[k] = out[k + 1];
+            continue;
+        }
         let (prior, jacobian) = prediction(model, &nodes[k], &nodes[k + 1]).ok_or(k + 1)?;
         let here = &nodes[k].posterior;
         // C = P F^T (P-)^-1, as the solution of P- C^T = F P.
