@@ -2,7 +2,8 @@
 //! odometry and sightings), read once outside the timing; the timed part
 //! is [`locus_replay::replay`] with the default configuration, every step
 //! handed to a sink that keeps the last position (so nothing is optimised
-//! away). Target: under 1 s per replay.
+//! away); then the same with the Rauch-Tung-Striebel smoother. Ratios to
+//! a pure-Python filter loop: `scripts/replay_speed.sh`.
 
 use core::hint::black_box;
 use std::path::PathBuf;
@@ -36,6 +37,20 @@ fn bench(c: &mut Criterion) {
             });
         },
     );
+    let smoothed = Config {
+        smooth: true,
+        ..Config::default()
+    };
+    group.bench_function("MRCLAM 6 robot 3, filter and smoother", |b| {
+        b.iter(|| {
+            let mut last = 0.0;
+            let report = replay(black_box(&log), &smoothed, |s| {
+                last = s.smoothed.map_or(0.0, |p| p.x[0]);
+            })
+            .unwrap();
+            black_box((report.steps, last))
+        });
+    });
     group.finish();
 }
 

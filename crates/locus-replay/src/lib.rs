@@ -176,7 +176,7 @@ struct Carried {
 }
 
 /// Dimension of the replay's state: the pose and the calibration of
-/// [`CalibratedUnicycle`].
+/// [`CalibratedUnicycle`](locus_models::calibrated_unicycle::CalibratedUnicycle).
 pub const STATE: usize = 7;
 
 /// The replay's state vector and covariance.
