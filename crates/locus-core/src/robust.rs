@@ -126,3 +126,73 @@ mod tests {
         assert!(StudentT::new(f64::INFINITY).is_err());
     }
 }
+
+#[cfg(test)]
+mod track_tests {
+    use nalgebra::{Matrix1, Matrix1x2, Matrix2, Vector1, Vector2};
+
+    use crate::{Belief, Ekf, MeasurementModel, Rules, StudentT, Track, Update};
+
+    /// The first of two states seen directly, variance `r`.
+    struct First {
+        r: f64,
+    }
+
+    impl MeasurementModel<f64, 2, 1> for First {
+        fn h(&self, x: &Vector2<f64>) -> Option<Vector1<f64>> {
+            Some(Vector1::new(x[0]))
+        }
+        fn jacobian(&self, _x: &Vector2<f64>) -> Matrix1x2<f64> {
+            Matrix1x2::new(1.0, 0.0)
+        }
+        fn noise(&self, _x: &Vector2<f64>) -> Matrix1<f64> {
+            Matrix1::new(self.r)
+        }
+    }
+
+    fn track() -> Track<f64, 2> {
+        Track::new(
+            Belief::new(Vector2::new(0.0, 1.0), Matrix2::new(1.0, 0.5, 0.5, 2.0)),
+            0.0,
+            (),
+        )
+    }
+
+    #[test]
+    fn an_agreeing_measurement_is_applied_as_the_gaussian_filter_would() {
+        let rules = Rules::new(Ekf::default());
+        let t = StudentT::new(4.0).unwrap();
+        let z = Vector1::new(0.5);
+        let (mut a, mut b) = (track(), track());
+        let ua = a.correct(&rules, &First { r: 1.0 }, &z).unwrap();
+        let ub = b.correct_robust(&rules, &t, &First { r: 1.0 }, &z).unwrap();
+        assert_eq!(a, b);
+        assert!(matches!(ub, Update::Applied { weight, .. } if weight == 1.0));
+        assert!(matches!(ua, Update::Applied { weight, .. } if weight == 1.0));
+    }
+
+    #[test]
+    fn an_outlier_is_down_weighted_and_moves_the_belief_less() {
+        let rules = Rules::new(Ekf::default());
+        let t = StudentT::new(4.0).unwrap();
+        let z = Vector1::new(20.0); // NIS = 400 / 2 = 200
+        let (mut a, mut b) = (track(), track());
+        a.correct(&rules, &First { r: 1.0 }, &z).unwrap();
+        let u = b.correct_robust(&rules, &t, &First { r: 1.0 }, &z).unwrap();
+        let Update::Applied {
+            correction, weight, ..
+        } = u
+        else {
+            panic!("applied without a gate");
+        };
+        // w = (4 + 1) / (4 + 200); the NIS reported is the nominal one.
+        assert!((weight - 5.0 / 204.0).abs() < 1e-12);
+        assert!((correction.nis - 200.0).abs() < 1e-9);
+        assert!(b.belief.x[0] < 0.1 * a.belief.x[0]);
+        assert!(b.belief.p[(0, 0)] > a.belief.p[(0, 0)]);
+        // Equal to a Gaussian correction with the noise divided by w.
+        let mut c = track();
+        c.correct(&rules, &First { r: 1.0 / weight }, &z).unwrap();
+        assert!((c.belief.x - b.belief.x).norm() < 1e-12);
+    }
+}

@@ -76,10 +76,6 @@ pub struct Rules<T: Scalar> {
     /// Recovery after consecutive gate rejections (`None`: a rejected
     /// measurement is only counted).
     pub recovery: Option<Recovery<T>>,
-    /// Student-t weighting of the corrections the gate lets through
-    /// (`None`: every applied correction has its nominal weight 1). A
-    /// correction applied after a [`Recovery`] inflation keeps weight 1.
-    pub robust: Option<StudentT<T>>,
 }
 
 impl<T: Scalar> Rules<T> {
@@ -88,7 +84,6 @@ impl<T: Scalar> Rules<T> {
         Self {
             ekf,
             recovery: None,
-            robust: None,
         }
     }
 
@@ -96,14 +91,6 @@ impl<T: Scalar> Rules<T> {
     #[must_use]
     pub fn with_recovery(mut self, recovery: Recovery<T>) -> Self {
         self.recovery = Some(recovery);
-        self
-    }
-
-    /// The same rules with Student-t weighting of the applied corrections
-    /// (see [`StudentT`]): heavy-tailed noise beside the gate.
-    #[must_use]
-    pub fn with_robust(mut self, robust: StudentT<T>) -> Self {
-        self.robust = Some(robust);
         self
     }
 }
@@ -122,7 +109,7 @@ pub enum Update<T: Scalar, const N: usize, const M: usize> {
         /// The rejected attempt before the inflation, if any.
         first: Option<Correction<T, N, M>>,
         /// The weight the correction was applied with, in (0, 1]: 1 without
-        /// [`Rules::robust`].
+        /// [`Track::correct_robust`].
         weight: T,
     },
     /// The gate rejected the measurement; the belief is kept (inflated if
@@ -273,18 +260,12 @@ impl<T: Scalar, const N: usize, X> Track<T, N, X> {
                 Err(e) => return Err(e),
             };
             if c.applied {
-                // After a recovery the prior, not the measurement, is what
-                // was wrong: the retry is applied at its nominal weight.
-                let (c, weight) = match rules.robust {
-                    Some(t) if first.is_none() => Self::reweigh(rules, &belief, model, z, c, t)?,
-                    _ => (c, T::one()),
-                };
                 self.belief = c.belief;
                 self.rejections = 0;
                 return Ok(Update::Applied {
                     correction: c,
                     first,
-                    weight,
+                    weight: T::one(),
                 });
             }
             rejections = rejections.saturating_add(1);
@@ -302,6 +283,51 @@ impl<T: Scalar, const N: usize, X> Track<T, N, X> {
                     });
                 }
             }
+        }
+    }
+    /// As [`Track::correct`], with a correction the gate lets through
+    /// weighted as Student-t noise (see [`StudentT`]): heavy tails beside
+    /// the gate. A correction applied after a [`Recovery`] inflation keeps
+    /// its nominal weight: the prior, not the measurement, was wrong. (A
+    /// method of its own, so that a filter without it, e.g. the firmware,
+    /// carries none of its code.)
+    ///
+    /// # Errors
+    /// As [`Track::correct`]; the track is then unchanged.
+    pub fn correct_robust<Me, const M: usize>(
+        &mut self,
+        rules: &Rules<T>,
+        robust: &StudentT<T>,
+        model: &Me,
+        z: &SVector<T, M>,
+    ) -> Result<Update<T, N, M>, Error>
+    where
+        Me: MeasurementModel<T, N, M>,
+    {
+        let (prior, rejections) = (self.belief, self.rejections);
+        match self.correct(rules, model, z)? {
+            Update::Applied {
+                correction,
+                first: None,
+                ..
+            } => {
+                let (c, weight) = match Self::reweigh(rules, &prior, model, z, correction, *robust)
+                {
+                    Ok(r) => r,
+                    Err(e) => {
+                        self.belief = prior;
+                        self.rejections = rejections;
+                        return Err(e);
+                    }
+                };
+                self.belief = c.belief;
+                Ok(Update::Applied {
+                    correction: c,
+                    first: None,
+                    weight,
+                })
+            }
+            other => Ok(other),
         }
     }
 }

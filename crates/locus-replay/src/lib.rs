@@ -256,7 +256,11 @@ fn apply(
                     ),
                     yaw: log.sensor.yaw,
                 };
-                let update = track.correct(rules, &model, &Vector2::new(z.range, z.bearing))?;
+                let z = Vector2::new(z.range, z.bearing);
+                let update = match cfg.robust_dof.map(StudentT::new) {
+                    Some(Ok(t)) => track.correct_robust(rules, &t, &model, &z)?,
+                    _ => track.correct(rules, &model, &z)?,
+                };
                 if let Some(first) = update.first_attempt() {
                     entry.nll = 0.5 * first.s.determinant().ln() + 0.5 * first.nis.min(NIS_CAP);
                 }
@@ -505,11 +509,9 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
     }
     let recovery = Recovery::new(cfg.recover_after, cfg.inflation)
         .map_err(|_| Error::InvalidConfig("recovery"))?;
-    let mut rules = Rules::new(ekf).with_recovery(recovery);
+    let rules = Rules::new(ekf).with_recovery(recovery);
     if let Some(dof) = cfg.robust_dof {
-        rules = rules.with_robust(
-            StudentT::new(dof).map_err(|_| Error::InvalidConfig("robust degrees of freedom"))?,
-        );
+        StudentT::new(dof).map_err(|_| Error::InvalidConfig("robust degrees of freedom"))?;
     }
     let tally = Tally::new(3).map_err(|_| Error::InvalidConfig("NEES degrees of freedom"))?;
     let start = Track::new(

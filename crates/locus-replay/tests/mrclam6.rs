@@ -431,3 +431,47 @@ fn a_delay_learned_on_three_robots_serves_the_other_two() {
         }
     }
 }
+
+/// Commanded velocities 10 % off (robot 3's logged `v` and `omega` both
+/// times 1.1): the scale-factor states find about 1/1.1 of the clean log's
+/// scales, and the errors stay as small, with no scale set by hand.
+#[test]
+fn velocities_ten_percent_off_need_no_hand_set_scale() {
+    let logs = logs();
+    let clean = &logs[2];
+    let mut off = clean.clone();
+    for o in &mut off.odometry {
+        o.v *= 1.1;
+        o.omega *= 1.1;
+    }
+    let cfg = as_the_command_runs(clean);
+    let a = run(clean, &cfg);
+    let b = run(&off, &cfg);
+    let (sa, sb) = (
+        a.smoothed_calibration.unwrap(),
+        b.smoothed_calibration.unwrap(),
+    );
+    println!(
+        "robot 3: scales clean {:.4} +- {:.4}, {:.4} +- {:.4}; 10 % off {:.4} +- {:.4}, {:.4} +- {:.4}; RMSE {:.3} -> {:.3} m",
+        sa[0].0,
+        sa[0].1,
+        sa[1].0,
+        sa[1].1,
+        sb[0].0,
+        sb[0].1,
+        sb[1].0,
+        sb[1].1,
+        a.summary.ekf_position_rmse,
+        b.summary.ekf_position_rmse
+    );
+    for i in 0..2 {
+        // The 10 % shows in the estimate, within its own 3 sigma.
+        let expected = sa[i].0 / 1.1;
+        assert!((sb[i].0 - expected).abs() < 3.0 * sb[i].1, "scale {i}");
+        assert!((sb[i].0 - expected).abs() < 0.03, "scale {i}");
+    }
+    assert!(b.summary.ekf_position_rmse < 1.05 * a.summary.ekf_position_rmse);
+    for share in b.summary.within_3_sigma {
+        assert!(share >= INSIDE_3_SIGMA);
+    }
+}
