@@ -158,31 +158,31 @@ impl<'a> Fields<'a> {
 
     /// The next field as a finite number that is `>= 0`.
     pub(crate) fn non_negative(&mut self, field: &'static str) -> Result<f64> {
-        let v = self.f64(field)?;
-        if v >= 0.0 {
-            Ok(v)
-        } else {
-            Err(self.field_error(
-                field,
-                FieldProblem::OutOfRange {
-                    value: v.to_string(),
-                    expected: ">= 0",
-                },
-            ))
-        }
+        self.bounded(field, |v| v >= 0.0, ">= 0")
     }
 
     /// The next field as a finite number that is `> 0`.
     pub(crate) fn positive(&mut self, field: &'static str) -> Result<f64> {
+        self.bounded(field, |v| v > 0.0, "> 0")
+    }
+
+    /// The next field as a finite number for which `ok` holds; else an
+    /// out-of-range error quoting `expected`.
+    fn bounded(
+        &mut self,
+        field: &'static str,
+        ok: impl Fn(f64) -> bool,
+        expected: &'static str,
+    ) -> Result<f64> {
         let v = self.f64(field)?;
-        if v > 0.0 {
+        if ok(v) {
             Ok(v)
         } else {
             Err(self.field_error(
                 field,
                 FieldProblem::OutOfRange {
                     value: v.to_string(),
-                    expected: "> 0",
+                    expected,
                 },
             ))
         }

@@ -91,35 +91,11 @@ impl<T: Scalar> MotionModel<T, 7, 6> for CalibratedUnicycle<T> {
     }
 
     fn jacobian_state(&self, x: &SVector<T, 7>, u: &Velocities<T>) -> SMatrix<T, 7, 7> {
-        let e = self.effective(x, u);
-        let m = pose_model::<T>();
-        let a = m.jacobian_state(&Self::pose(x), &e);
-        // d pose / d(v_e, omega_e): the unicycle's noise Jacobian.
-        let g = m.jacobian_noise(&Self::pose(x), &e);
-        let mut j = SMatrix::<T, 7, 7>::identity();
-        for r in 0..3 {
-            for c in 0..3 {
-                j[(r, c)] = a[(r, c)];
-            }
-            j[(r, V_SCALE)] = g[(r, 0)] * u.v;
-            j[(r, OMEGA_SCALE)] = g[(r, 1)] * u.omega;
-            j[(r, OMEGA_BIAS)] = g[(r, 1)];
-        }
-        j
+        self.linearize(x, u).1
     }
 
     fn jacobian_noise(&self, x: &SVector<T, 7>, u: &Velocities<T>) -> SMatrix<T, 7, 6> {
-        let e = self.effective(x, u);
-        let g = pose_model::<T>().jacobian_noise(&Self::pose(x), &e);
-        let mut w = SMatrix::<T, 7, 6>::zeros();
-        for r in 0..3 {
-            w[(r, 0)] = g[(r, 0)];
-            w[(r, 1)] = g[(r, 1)];
-        }
-        for i in 0..4 {
-            w[(V_SCALE + i, 2 + i)] = T::one();
-        }
-        w
+        self.linearize(x, u).2
     }
 
     fn noise_cov(&self, u: &Velocities<T>) -> SMatrix<T, 6, 6> {
@@ -130,6 +106,41 @@ impl<T: Scalar> MotionModel<T, 7, 6> for CalibratedUnicycle<T> {
             q[(2 + i, 2 + i)] = self.walk[i] * u.dt;
         }
         q
+    }
+
+    /// `f`, `A` and `W` from one linearisation of the pose model (one
+    /// `sinc` and one `sin_cos`).
+    #[inline]
+    fn linearize(
+        &self,
+        x: &SVector<T, 7>,
+        u: &Velocities<T>,
+    ) -> (SVector<T, 7>, SMatrix<T, 7, 7>, SMatrix<T, 7, 6>) {
+        let e = self.effective(x, u);
+        // `g` = d pose / d(v_e, omega_e), the pose model's noise Jacobian:
+        // the scales and the bias act through the effective velocities.
+        let (pose, a3, g) = pose_model::<T>().linearize(&Self::pose(x), &e);
+        let mut f = *x;
+        f[0] = pose[0];
+        f[1] = pose[1];
+        f[2] = pose[2];
+        f[BEARING_BIAS] = wrap_angle(f[BEARING_BIAS]);
+        let mut a = SMatrix::<T, 7, 7>::identity();
+        let mut w = SMatrix::<T, 7, 6>::zeros();
+        for r in 0..3 {
+            for c in 0..3 {
+                a[(r, c)] = a3[(r, c)];
+            }
+            a[(r, V_SCALE)] = g[(r, 0)] * u.v;
+            a[(r, OMEGA_SCALE)] = g[(r, 1)] * u.omega;
+            a[(r, OMEGA_BIAS)] = g[(r, 1)];
+            w[(r, 0)] = g[(r, 0)];
+            w[(r, 1)] = g[(r, 1)];
+        }
+        for i in 0..4 {
+            w[(V_SCALE + i, 2 + i)] = T::one();
+        }
+        (f, a, w)
     }
 
     fn input_is_finite(&self, u: &Velocities<T>) -> bool {

@@ -145,6 +145,38 @@ impl<T: Scalar> MotionModel<T, 3, 2> for Unicycle<T> {
         )
     }
 
+    /// `f`, `A` and `W` together: one `sinc` and one `sin_cos` for the
+    /// three (each alone evaluates its own).
+    #[inline]
+    fn linearize(
+        &self,
+        x: &SVector<T, 3>,
+        u: &Velocities<T>,
+    ) -> (SVector<T, 3>, SMatrix<T, 3, 3>, SMatrix<T, 3, 2>) {
+        let half_dt = u.dt * cast::<T>(0.5);
+        let h = u.omega * half_dt;
+        let (sc, dsc) = sinc_and_derivative(h);
+        let d = u.v * u.dt * sc;
+        let (s, c) = (x[2] + h).sin_cos();
+        let (o, z) = (T::one(), T::zero());
+        let f = Vector3::new(
+            x[0] + d * c,
+            x[1] + d * s,
+            wrap_angle(x[2] + u.omega * u.dt),
+        );
+        let a = SMatrix::<T, 3, 3>::new(o, z, -d * s, z, o, d * c, z, z, o);
+        let dd_dw = u.v * u.dt * dsc * half_dt;
+        let w = SMatrix::<T, 3, 2>::new(
+            u.dt * sc * c,
+            dd_dw * c - d * half_dt * s,
+            u.dt * sc * s,
+            dd_dw * s + d * half_dt * c,
+            z,
+            u.dt,
+        );
+        (f, a, w)
+    }
+
     fn jacobian_state(&self, x: &SVector<T, 3>, u: &Velocities<T>) -> SMatrix<T, 3, 3> {
         let (d, a) = self.chord(x[2], u);
         let (s, c) = a.sin_cos();
