@@ -164,6 +164,44 @@ impl Step {
         }
     }
 
+    /// The CSV header of [`Step::write_smoothed_csv_row`] (units in the
+    /// names).
+    #[must_use]
+    pub fn smoothed_csv_header() -> &'static str {
+        "index,time_s,x_m,y_m,theta_rad,var_x_m2,cov_xy_m2,var_y_m2,var_theta_rad2,\
+         v_scale,omega_scale,omega_bias_rad_per_s,bearing_bias_rad"
+    }
+
+    /// Appends the step's smoothed pose, its covariance and the smoothed
+    /// calibration as one CSV line (no line end) to `out`; nothing if the
+    /// step has no smoothed estimate.
+    pub fn write_smoothed_csv_row(&self, out: &mut String) {
+        use core::fmt::Write as _;
+        use locus_logs::decimal::push_f64;
+        let (Some(b), Some(c)) = (self.smoothed, self.smoothed_calibration) else {
+            return;
+        };
+        let _ = write!(out, "{}", self.index);
+        let p = &b.p;
+        for v in [
+            self.time,
+            b.x[0],
+            b.x[1],
+            b.x[2],
+            p[(0, 0)],
+            p[(0, 1)],
+            p[(1, 1)],
+            p[(2, 2)],
+            c[0],
+            c[1],
+            c[2],
+            c[3],
+        ] {
+            out.push(',');
+            push_f64(out, v);
+        }
+    }
+
     /// The figures `locus run` summarises and draws, if the step has a
     /// ground truth to compare with (NEES against it, 3 dof).
     #[must_use]

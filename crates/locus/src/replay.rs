@@ -121,7 +121,7 @@ struct Common {
     no_estimate: bool,
     /// Also run the Rauch-Tung-Striebel smoother over the whole log: its
     /// accuracy, 3-sigma shares and NEES beside the filter's (table and
-    /// metrics.json).
+    /// metrics.json), and the smoothed trajectory in smoothed.csv.
     #[arg(long)]
     smooth: bool,
     /// Pictures.
@@ -266,6 +266,25 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
     writeln!(csv, "{}", locus_replay::Step::csv_header())
         .with_context(|| format!("writing {}", csv_path.display()))?;
 
+    // With --smooth, the smoothed trajectory goes to smoothed.csv; without,
+    // a smoothed.csv of an earlier run in this folder is removed so that it
+    // is not taken for this run's.
+    let smoothed_path = out.join("smoothed.csv");
+    let mut smoothed_csv = if cfg.smooth {
+        let file = File::create(&smoothed_path)
+            .with_context(|| format!("creating {}", smoothed_path.display()))?;
+        let mut w = BufWriter::new(file);
+        writeln!(w, "{}", locus_replay::Step::smoothed_csv_header())
+            .with_context(|| format!("writing {}", smoothed_path.display()))?;
+        Some(w)
+    } else {
+        match fs::remove_file(&smoothed_path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(e).with_context(|| format!("removing {}", smoothed_path.display()));
+            }
+            _ => None,
+        }
+    };
     let total = (log.odometry.len() + log.sightings.len()) as u64;
     let bar = progress_bar(total, "{pos}/{len} events, {elapsed} elapsed")?;
     let mut samples: Vec<Sample> = Vec::new();
@@ -287,6 +306,14 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
             if let Err(e) = csv.write_all(row.as_bytes()) {
                 io_error = Some(e);
             }
+            if let Some(w) = smoothed_csv.as_mut() {
+                row.clear();
+                step.write_smoothed_csv_row(&mut row);
+                row.push('\n');
+                if let Err(e) = w.write_all(row.as_bytes()) {
+                    io_error = Some(e);
+                }
+            }
         }
     })
     .with_context(|| format!("replaying {}", log.name))?;
@@ -296,6 +323,10 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
     }
     csv.flush()
         .with_context(|| format!("writing {}", csv_path.display()))?;
+    if let Some(mut w) = smoothed_csv {
+        w.flush()
+            .with_context(|| format!("writing {}", smoothed_path.display()))?;
+    }
 
     #[allow(clippy::cast_precision_loss)]
     let dt = log.duration() / log.odometry.len().max(1) as f64;
@@ -348,6 +379,9 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
     text.push_str(&format!("{}\n", calibration_table(&report)));
     text.push_str(&format!("{}\n", counts_table(cfg, &report)));
     text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
+    if cfg.smooth {
+        text.push_str(&format!("smoothed: {}\n", smoothed_path.display()));
+    }
     print_out(&text)
 }
 

@@ -652,6 +652,32 @@ fn replay_mrclam_and_its_csv_export_agree_and_errors_name_the_file() {
     assert_eq!(ekf, rmse_x(&b, "EKF (odometry + landmarks)"));
     assert!(std::path::Path::new(&out_b).join("metrics.json").is_file());
 
+    // --smooth: the smoother's row in the table, one smoothed.csv row per
+    // event; a later run without it removes the stale smoothed.csv.
+    let s = locus(&[
+        "replay",
+        "csv",
+        csv_s,
+        "--out",
+        &out_b,
+        "--no-plots",
+        "--smooth",
+    ]);
+    assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    let s = String::from_utf8(s.stdout).unwrap();
+    assert!(s.contains("│ smoother"), "{s}");
+    let smoothed = std::path::Path::new(&out_b).join("smoothed.csv");
+    let rows = std::fs::read_to_string(&smoothed).unwrap();
+    let log_rows = std::fs::read_to_string(std::path::Path::new(&out_b).join("log.csv")).unwrap();
+    assert!(rows.starts_with("index,time_s,x_m,y_m,theta_rad,"));
+    assert_eq!(rows.lines().count(), log_rows.lines().count());
+    assert!(
+        locus(&["replay", "csv", csv_s, "--out", &out_b, "--no-plots"])
+            .status
+            .success()
+    );
+    assert!(!smoothed.exists(), "stale smoothed.csv left behind");
+
     let missing = dir.join("none.csv");
     let e = locus(&["replay", "csv", missing.to_str().unwrap()]);
     assert!(!e.status.success());
