@@ -27,6 +27,10 @@ pub struct Config {
     /// it says, s (>= 0): commanded velocities lead the motion they
     /// command. Odometry records are applied at their time plus this.
     pub odometry_delay: f64,
+    /// Compare each step with the ground truth (`false`: steps carry no
+    /// truth and the report's summaries are empty; for replays whose only
+    /// use is the innovation likelihood, e.g. the estimate's grids).
+    pub evaluate: bool,
     /// Run the Rauch-Tung-Striebel smoother after the forward pass: every
     /// step then also carries its smoothed estimate, and the report the
     /// smoother's figures.
@@ -108,6 +112,7 @@ impl Default for Config {
             calibration: Calibration::default(),
             robust_dof: Some(4.0),
             odometry_delay: 0.0,
+            evaluate: true,
             smooth: false,
             gate: Some(0.99),
             recover_after: 5,

@@ -391,7 +391,11 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             smoothed: None,
             smoothed_calibration: None,
             dead_reckoning: [d[0], d[1], d[2]],
-            truth: self.truth.pose_at(time, self.cfg.truth_max_gap),
+            truth: if self.cfg.evaluate {
+                self.truth.pose_at(time, self.cfg.truth_max_gap)
+            } else {
+                None
+            },
         };
         self.next_index += 1;
         self.report.steps += 1;

@@ -152,6 +152,7 @@ pub fn measurement_round(log: &Log, cfg: &Config) -> Result<(Round, Config), Err
     let mut kept: Vec<Kept> = Vec::with_capacity(log.sightings.len());
     let run = Config {
         smooth: true,
+        evaluate: false,
         ..*cfg
     };
     replay(log, &run, |s: &Step| {
@@ -234,6 +235,7 @@ pub fn measurement_round(log: &Log, cfg: &Config) -> Result<(Round, Config), Err
 fn nll(log: &Log, cfg: &Config) -> Result<f64, Error> {
     let run = Config {
         smooth: false,
+        evaluate: false,
         ..*cfg
     };
     Ok(replay(log, &run, |_| {})?.innovation_nll)
@@ -299,6 +301,7 @@ pub fn estimate(log: &Log, start: &Config) -> Result<Estimate, Error> {
     Ok(Estimate {
         config: Config {
             smooth: start.smooth,
+            evaluate: start.evaluate,
             ..cfg
         },
         rounds,
