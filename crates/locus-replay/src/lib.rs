@@ -422,26 +422,28 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
         if !self.cfg.smooth {
             return Ok(());
         }
-        let smoothed = smoother::rts(&self.cfg.motion_model(), &self.nodes).map_err(|index| {
-            Error::Smoother {
-                time: self.held[index].time,
+        let held = &mut self.held;
+        let mut first_calibration = None;
+        smoother::rts(&self.cfg.motion_model(), &self.nodes, |k, s| {
+            held[k].smoothed = Some(pose_belief(s));
+            held[k].smoothed_calibration = Some(calibration_of(s).map(|c| c.0));
+            if k == 0 {
+                first_calibration = Some(calibration_of(s));
             }
+        })
+        .map_err(|index| Error::Smoother {
+            time: self.held[index].time,
         })?;
         let mut tally =
             Tally::new(3).map_err(|_| Error::InvalidConfig("NEES degrees of freedom"))?;
-        for (step, s) in self.held.iter_mut().zip(&smoothed) {
-            let pose = pose_belief(s);
-            step.smoothed = Some(pose);
-            step.smoothed_calibration = Some(calibration_of(s).map(|c| c.0));
-            if let Some(sample) = step.sample_of(&pose) {
+        for step in &self.held {
+            if let Some(sample) = step.smoothed.and_then(|pose| step.sample_of(&pose)) {
                 tally.push(&sample);
             }
             (self.sink)(step);
         }
         self.report.smoothed = Some(tally.summary(0));
-        if let Some(last) = smoothed.first() {
-            self.report.smoothed_calibration = Some(calibration_of(last));
-        }
+        self.report.smoothed_calibration = first_calibration;
         self.held = Vec::new();
         self.nodes = Vec::new();
         Ok(())

@@ -65,24 +65,28 @@ fn wrap_angles(mut v: StateVector) -> StateVector {
     v
 }
 
-/// The smoothed beliefs of `nodes` (same order).
+/// Runs the backward pass over `nodes`, handing each smoothed belief to
+/// `keep` with its index, from the last node to the first (the caller keeps
+/// what it needs: the pass holds only the belief ahead).
 ///
 /// # Errors
-/// The index of the event whose predicted covariance is not positive
-/// definite.
+/// The index of the event whose prediction fails or whose predicted
+/// covariance is not positive definite.
 pub(crate) fn rts(
     model: &CalibratedUnicycle<f64>,
     nodes: &[Node],
-) -> Result<Vec<Belief<f64, STATE>>, usize> {
+    mut keep: impl FnMut(usize, &Belief<f64, STATE>),
+) -> Result<(), usize> {
     let Some(last) = nodes.last() else {
-        return Ok(Vec::new());
+        return Ok(());
     };
-    let mut out = vec![last.posterior; nodes.len()];
+    let mut ahead = last.posterior;
+    keep(nodes.len() - 1, &ahead);
     for k in (0..nodes.len() - 1).rev() {
         if nodes[k + 1].time == nodes[k].time {
             // No prediction between them: C = I, the smoothed belief is
             // the next one's.
-            out[k] = out[k + 1];
+            keep(k, &ahead);
             continue;
         }
         let (prior, jacobian) = prediction(model, &nodes[k], &nodes[k + 1]).ok_or(k + 1)?;
@@ -90,13 +94,13 @@ pub(crate) fn rts(
         // C = P F^T (P-)^-1, as the solution of P- C^T = F P.
         let chol = Cholesky::new(prior.p).ok_or(k + 1)?;
         let c = chol.solve(&(jacobian * here.p)).transpose();
-        let ahead = out[k + 1];
         let dx = wrap_angles(ahead.x - prior.x);
         let x = wrap_angles(here.x + c * dx);
         let p = here.p + c * (ahead.p - prior.p) * c.transpose();
-        out[k] = Belief::new(x, (p + p.transpose()) * 0.5);
+        ahead = Belief::new(x, (p + p.transpose()) * 0.5);
+        keep(k, &ahead);
     }
-    Ok(out)
+    Ok(())
 }
 
 #[cfg(test)]
@@ -144,7 +148,8 @@ mod tests {
                 omega: 0.0,
             });
         }
-        let s = rts(&model, &nodes).unwrap();
+        let mut s = vec![nodes[0].posterior; n];
+        rts(&model, &nodes, |k, b| s[k] = *b).unwrap();
         // Batch: minimise x0^2/p0 + sum (z_k - x_k)^2/r + sum (x_k - x_{k-1})^2/q.
         let mut a = locus_core::nalgebra::SMatrix::<f64, 6, 6>::zeros();
         let mut b = locus_core::nalgebra::SVector::<f64, 6>::zeros();
