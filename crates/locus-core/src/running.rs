@@ -330,9 +330,7 @@ impl<T: Scalar, const N: usize, X> Track<T, N, X> {
             other => Ok(other),
         }
     }
-}
 
-impl<T: Scalar, const N: usize, X> Track<T, N, X> {
     /// The correction `c` (applied at nominal noise to `belief`) redone
     /// with its Student-t weight, if that is below 1; with the weight. The
     /// NIS stays the nominal one.

@@ -17,9 +17,9 @@
 
 use std::time::Instant;
 
-use locus_core::Pose;
 use locus_core::chi2;
 use locus_core::nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+use locus_core::{Belief, Pose};
 
 /// The NEES `e^T P^-1 e` of an estimate with error `e` (truth minus
 /// estimate, angles wrapped) and covariance `P` ([`locus_core::nees`]);
@@ -83,6 +83,41 @@ pub struct Sample {
 }
 
 impl Sample {
+    /// The sample of a planar robot at `step` (`time`, s): its estimate
+    /// `belief` of `[x, y, theta]` against `truth`, odometry alone at
+    /// `odometry` if there is one, the step's correction `(NIS, dof,
+    /// applied)` and whether a measurement arrived. NEES of 3 dof
+    /// ([`planar_nees`]); z is 0.
+    #[must_use]
+    pub fn planar(
+        step: usize,
+        time: f64,
+        truth: &Pose<f64>,
+        belief: &Belief<f64, 3>,
+        odometry: Option<&Pose<f64>>,
+        correction: Option<(f64, u32, bool)>,
+        measured: bool,
+    ) -> Self {
+        let x = &belief.x;
+        let error = Pose::from_vector(x).error_to(truth);
+        Self {
+            step,
+            time,
+            truth: [truth.x, truth.y, 0.0],
+            truth_heading: truth.theta,
+            estimate: [x[0], x[1], 0.0],
+            estimate_heading: x[2],
+            heading_error: error[2],
+            covariance: matrix3(&belief.p),
+            var_z: 0.0,
+            odometry: odometry.map(|o| ([o.x, o.y, 0.0], o.error_to(truth)[2])),
+            nees: nees(&error, &belief.p),
+            nees_dof: 3,
+            correction,
+            measured,
+        }
+    }
+
     /// Squared position error (m^2).
     #[must_use]
     pub fn position_error_sq(&self) -> f64 {

@@ -49,6 +49,8 @@
 //!
 //! Units: SI (m, rad, s); headings wrapped to (-pi, pi].
 
+extern crate alloc;
+
 mod config;
 pub mod log;
 pub mod noise;

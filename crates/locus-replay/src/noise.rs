@@ -41,7 +41,6 @@
 //! likelihood's, which is smaller than what keeps the filter honest when
 //! the odometry's errors are not white.
 
-extern crate alloc;
 use alloc::collections::BTreeMap;
 
 use locus_core::nalgebra::{SVector, Vector2};

@@ -2,7 +2,7 @@
 //! with it, the estimate after it, its CSV row and its evaluation sample.
 
 use locus_core::nalgebra::Vector3;
-use locus_core::{Belief, wrap_angle};
+use locus_core::{Belief, Pose};
 use locus_eval::Sample;
 use locus_logs::mrclam::TruthPose;
 
@@ -214,10 +214,6 @@ impl Step {
     #[must_use]
     pub fn sample_of(&self, belief: &Belief<f64, 3>) -> Option<Sample> {
         let t = self.truth?;
-        let x = &belief.x;
-        let e = Vector3::new(t.x - x[0], t.y - x[1], wrap_angle(t.theta - x[2]));
-        let nees = locus_eval::nees(&e, &belief.p);
-        let covariance = locus_eval::matrix3(&belief.p);
         let d = &self.dead_reckoning;
         let (measured, correction) = match self.kind {
             EventKind::Odometry { .. } => (false, None),
@@ -227,21 +223,14 @@ impl Step {
                 SightingOutcome::NotInMap | SightingOutcome::NoMeasurement => (true, None),
             },
         };
-        Some(Sample {
-            step: self.index,
-            time: self.elapsed,
-            truth: [t.x, t.y, 0.0],
-            truth_heading: t.theta,
-            estimate: [x[0], x[1], 0.0],
-            estimate_heading: x[2],
-            heading_error: e[2],
-            covariance,
-            var_z: 0.0,
-            odometry: Some(([d[0], d[1], 0.0], wrap_angle(t.theta - d[2]))),
-            nees,
-            nees_dof: 3,
+        Some(Sample::planar(
+            self.index,
+            self.elapsed,
+            &Pose::from_vector(&Vector3::new(t.x, t.y, t.theta)),
+            belief,
+            Some(&Pose::from_vector(&Vector3::new(d[0], d[1], d[2]))),
             correction,
             measured,
-        })
+        ))
     }
 }

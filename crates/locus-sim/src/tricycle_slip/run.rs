@@ -1,7 +1,7 @@
 //! The room and the run of `tricycle-slip` ([`run_tricycle_slip`]).
 
 use locus_core::nalgebra::{Matrix3, Vector1, Vector3};
-use locus_core::{Belief, ChiSquareGate, Ekf, MeasurementModel, wrap_angle};
+use locus_core::{Belief, ChiSquareGate, Ekf, MeasurementModel};
 use locus_models::laser_wall::{LaserMount, LaserRange, Segment};
 use locus_models::{CountNoise, RearCounts, TricycleRear};
 use locus_odometry::redundant::{Integration, Odometry, Reading, Selection};
@@ -202,30 +202,15 @@ pub fn run_tricycle_slip(
 
             let rp = rear_odo.pose();
             let sp = rej_odo.pose();
-            let x = &belief.x;
-            let e = Vector3::new(
-                truth.x - x[0],
-                truth.y - x[1],
-                wrap_angle(truth.theta - x[2]),
-            );
-            let nees = locus_eval::nees(&e, &belief.p);
-            let covariance = locus_eval::matrix3(&belief.p);
-            let sample = Sample {
+            let sample = Sample::planar(
                 step,
-                time: (step + 1) as f64 * cfg.dt,
-                truth: [truth.x, truth.y, 0.0],
-                truth_heading: truth.theta,
-                estimate: [x[0], x[1], 0.0],
-                estimate_heading: x[2],
-                heading_error: e[2],
-                covariance,
-                var_z: 0.0,
-                odometry: Some(([rp.x, rp.y, 0.0], wrap_angle(truth.theta - rp.theta))),
-                nees,
-                nees_dof: 3,
+                (step + 1) as f64 * cfg.dt,
+                &truth,
+                &belief,
+                Some(&rp),
                 correction,
-                measured: ranges.iter().any(Option::is_some),
-            };
+                ranges.iter().any(Option::is_some),
+            );
             tally.push(&sample);
             sink(&TricycleSlipRecord {
                 sample,

@@ -233,23 +233,15 @@ pub fn run_wall45(
                 }
             }
 
-            let covariance = locus_eval::matrix3(&belief.p);
-            let sample = Sample {
+            let sample = Sample::planar(
                 step,
-                time: (step + 1) as f64 * cfg.dt,
-                truth: [true_x[0], true_x[1], 0.0],
-                truth_heading: true_x[2],
-                estimate: [belief.x[0], belief.x[1], 0.0],
-                estimate_heading: belief.x[2],
-                heading_error: wrap_angle(true_x[2] - belief.x[2]),
-                covariance,
-                var_z: 0.0,
-                odometry: Some(([odo.x[0], odo.x[1], 0.0], wrap_angle(true_x[2] - odo.x[2]))),
-                nees: locus_eval::planar_nees(&belief.x, &belief.p, &Pose::from_vector(&true_x)),
-                nees_dof: 3,
+                (step + 1) as f64 * cfg.dt,
+                &Pose::from_vector(&true_x),
+                &belief,
+                Some(&Pose::from_vector(&odo.x)),
                 correction,
-                measured: range.is_some(),
-            };
+                range.is_some(),
+            );
             tally.push(&sample);
             sink(&Wall45Record {
                 sample,
