@@ -57,7 +57,16 @@ impl<T: Real> Odometer<T> {
     /// difference is the shortest way round the counter (`wrapping_diff`),
     /// so a counter that wraps between two readings costs nothing.
     pub fn travel(&mut self, counts: [u32; 2]) -> Option<WheelTravel<T>> {
-        let last = self.last.replace(counts)?;
+        let travel = self.travel_since(counts);
+        self.last = Some(counts);
+        travel
+    }
+
+    /// The wheel travels (m) from the reference counts to `counts`, leaving
+    /// the reference where it is (`None` before the first counts): what a
+    /// caller checks before it accepts the counts.
+    pub fn travel_since(&self, counts: [u32; 2]) -> Option<WheelTravel<T>> {
+        let last = self.last?;
         Some(WheelTravel {
             d1: self
                 .wheel
@@ -66,6 +75,12 @@ impl<T: Real> Odometer<T> {
                 .wheel
                 .distance(wrapping_diff(counts[1], last[1], self.bits)),
         })
+    }
+
+    /// Makes `counts` the reference, discarding whatever the wheels did
+    /// since the last counts (a link that lost track of the counts).
+    pub fn set_reference(&mut self, counts: [u32; 2]) {
+        self.last = Some(counts);
     }
 }
 
@@ -290,6 +305,18 @@ impl<T: Real> Localiser<T> {
         let rules = self.filter.rules().with_recovery(recovery);
         self.filter.set_rules(rules);
         self
+    }
+
+    /// The odometer (its reference counts and wheels).
+    pub fn odometer(&self) -> &Odometer<T> {
+        &self.odometer
+    }
+
+    /// Makes `counts` the odometer's reference without predicting: the
+    /// travel since the last counts is unknown (see
+    /// [`Odometer::set_reference`]).
+    pub fn set_reference_counts(&mut self, counts: [u32; 2]) {
+        self.odometer.set_reference(counts);
     }
 
     /// The belief now.

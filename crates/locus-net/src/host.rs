@@ -12,16 +12,23 @@
 //! # Loop
 //! 1. Send a zero-speed command (ack [`NO_ACK`]) every `resend` until the
 //!    first telemetry packet arrives.
-//! 2. For each datagram from the robot's address: decode and classify it
-//!    ([`Receiver`]). Dropped classes (duplicate, late, corrupt, malformed)
-//!    only count. The first applied packet sets the reference encoder
-//!    counts. Every later one: the count differences give the wheel
-//!    travels since the last applied packet; with `g` sequence numbers
-//!    skipped they are split into `g + 1` equal predictions (predicting
-//!    through the gap, [`Localiser::counts`]); the IR reading, if any, is
-//!    associated with a wall and corrects the filter behind its gate
-//!    ([`Localiser::ir`]); the clock estimator gets
-//!    (robot timestamp, receive time).
+//! 2. For each datagram from the robot's address, [`Host::receive`]:
+//!    decode and classify it ([`Receiver`]). Dropped classes (duplicate,
+//!    late, corrupt, malformed, suspect) only count. The first applied
+//!    packet sets the reference encoder counts and robot time. Every later
+//!    one is first checked against the [`Limits`] (robot time advancing and
+//!    covered by its packets, wheel travels the top speed can explain, IR
+//!    readings in range); an implausible one is refused whole and counted,
+//!    and the belief is kept. A plausible one: the count differences give
+//!    the wheel travels since the last accepted packet; standing for `g + 1`
+//!    packets they are split into `g + 1` equal predictions (at most
+//!    `MAX_JUMP + 1`: bounded work per packet; [`Localiser::counts`]); the
+//!    IR reading, if any, is associated with a wall and corrects the filter
+//!    behind its gate ([`Localiser::ir`]); the clock estimator gets
+//!    (robot timestamp, receive time). A filter error is counted and the
+//!    belief kept. [`RESYNC_AFTER`] refused packets in a row that agree with
+//!    each other (a robot whose counters were reset) become the new
+//!    reference, so the host is never locked out.
 //! 3. The path controller maps the estimate to a body twist, turned into
 //!    wheel speeds; a command packet carrying them and acknowledging the
 //!    packet is sent. When the laps are done the host
@@ -35,9 +42,13 @@ use std::time::Instant;
 
 use locus_control::{Controller, FollowPath, wheel_speeds};
 use locus_link::clock::ClockFit;
-use locus_link::{ClockEstimator, CommandPacket, Counters, MAX_PACKET, NO_ACK, Receiver, Status};
+use locus_link::receiver::{MAX_JUMP, RESYNC_AFTER};
+use locus_link::{
+    ClockEstimator, CommandPacket, Counters, MAX_PACKET, NO_ACK, Receiver, Status, Telemetry,
+};
 use locus_models::{Localiser, LocaliserConfig, Segment};
 
+use crate::plausible::{Implausible, Limits};
 use crate::{Error, at_least_1us, is_timeout};
 
 /// Buckets in the clock estimator's window.
@@ -72,6 +83,9 @@ pub struct HostConfig {
     /// Bucket of the clock estimator's minimum-delay filter (s of host
     /// time); the window is 64 buckets. Default 0.05 s.
     pub clock_bucket: f64,
+    /// What a telemetry packet may say (top wheel speed, longest period,
+    /// longest IR reading).
+    pub limits: Limits,
 }
 
 impl HostConfig {
@@ -88,6 +102,7 @@ impl HostConfig {
             handshake: Duration::from_secs(10),
             quiet: Duration::from_millis(500),
             clock_bucket: 0.05,
+            limits: Limits::default(),
         }
     }
 
@@ -127,6 +142,7 @@ impl HostConfig {
         if let Some((_, what)) = checks.into_iter().find(|(ok, _)| !ok) {
             return Err(Error::Config(what));
         }
+        self.limits.validate()?;
         l.validate().map_err(|e| match e {
             locus_core::Error::InvalidParameter(what) => Error::Config(what),
             _ => Error::Config("invalid localiser configuration"),
@@ -156,10 +172,269 @@ pub struct HostStep {
     pub command: Option<[f32; 2]>,
 }
 
+/// What one datagram did to the host.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Outcome {
+    /// It did not decode (counted as corrupt or malformed).
+    Undecodable,
+    /// It decoded but was dropped: duplicate, late or suspect by its
+    /// sequence number (the status), or refused for its content.
+    Dropped(Dropped),
+    /// It was applied.
+    Applied(HostStep),
+}
+
+/// Why a decoded packet was dropped.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Dropped {
+    /// By its sequence number: duplicate, late or suspect.
+    Sequence(Status),
+    /// By its content.
+    Implausible(Implausible),
+}
+
+/// The last accepted telemetry packet: the reference of the next.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Reference {
+    sequence: u32,
+    timestamp_us: u64,
+    counts: [u32; 2],
+}
+
+impl Reference {
+    fn of(t: &Telemetry) -> Self {
+        Self {
+            sequence: t.sequence,
+            timestamp_us: t.timestamp_us,
+            counts: t.counts,
+        }
+    }
+}
+
+/// The host's per-packet logic, without a socket: receiver, limits,
+/// localiser, clock estimator and path controller. [`run_host`] feeds it
+/// datagrams; a test can feed it any bytes.
+#[derive(Debug)]
+pub struct Host {
+    cfg: HostConfig,
+    localiser: Localiser<f64>,
+    controller: FollowPath<4>,
+    receiver: Receiver,
+    clock: ClockEstimator<CLOCK_WINDOW>,
+    /// The last accepted packet.
+    reference: Option<Reference>,
+    /// The newest refused packet and how many refused packets in a row,
+    /// each plausible against the one before, ended with it.
+    refused: Option<(Reference, u32)>,
+    /// Times the reference moved to a run of refused packets.
+    resync: u64,
+    laps: usize,
+    done: bool,
+    corrections: u64,
+    filter_errors: u64,
+    estimates: Vec<(u32, [f64; 3])>,
+}
+
+impl Host {
+    /// A host for `cfg`, at the filter's initial belief.
+    ///
+    /// # Errors
+    /// [`Error::Config`] naming the first invalid value.
+    pub fn new(cfg: &HostConfig) -> Result<Self, Error> {
+        cfg.validate()?;
+        Ok(Self {
+            cfg: *cfg,
+            localiser: cfg.localiser.localiser()?,
+            controller: FollowPath::square(cfg.control),
+            receiver: Receiver::new(),
+            clock: ClockEstimator::new(cfg.clock_bucket),
+            reference: None,
+            refused: None,
+            resync: 0,
+            laps: 0,
+            done: false,
+            corrections: 0,
+            filter_errors: 0,
+            estimates: Vec::new(),
+        })
+    }
+
+    /// The filter's belief now.
+    pub fn belief(&self) -> &locus_core::Belief<f64, 3> {
+        self.localiser.belief()
+    }
+
+    /// The receiver's counters; `resync` also counts the times a run of
+    /// refused packets became the reference.
+    pub fn counters(&self) -> Counters {
+        let mut c = self.receiver.counters();
+        c.resync += self.resync;
+        c
+    }
+
+    /// Filter errors (the belief was kept).
+    pub fn filter_errors(&self) -> u64 {
+        self.filter_errors
+    }
+
+    /// Whether the laps are done (no more commands).
+    pub fn done(&self) -> bool {
+        self.done
+    }
+
+    /// One datagram from the robot, received at `host_time` (s since the
+    /// run began). Work per call is bounded: at most `MAX_JUMP + 1`
+    /// predictions.
+    #[allow(clippy::cast_possible_truncation, clippy::cast_precision_loss)]
+    pub fn receive(&mut self, bytes: &[u8], host_time: f64) -> Outcome {
+        let Ok((t, status)) = self.receiver.receive_telemetry(bytes) else {
+            return Outcome::Undecodable;
+        };
+        let predicted = match status {
+            Status::Applied { .. } | Status::Resynchronised => {
+                match self.reference.filter(|_| status != Status::Resynchronised) {
+                    None => {
+                        self.start_stream(&t);
+                        false
+                    }
+                    Some(r) => match self.accept(&t, &r) {
+                        Ok(()) => true,
+                        Err(why) => return Outcome::Dropped(Dropped::Implausible(why)),
+                    },
+                }
+            }
+            Status::Duplicate | Status::Late | Status::Suspect => {
+                return Outcome::Dropped(Dropped::Sequence(status));
+            }
+        };
+        let robot_time = t.timestamp_us as f64 * 1e-6;
+        self.clock.push(robot_time, host_time);
+        let corrected = match t.ir.filter(|_| predicted && self.cfg.use_ir) {
+            Some([ds1, ds2]) => match self
+                .localiser
+                .ir(&self.cfg.walls, [f64::from(ds1), f64::from(ds2)])
+            {
+                Ok(outcome) => outcome.applied(),
+                Err(_) => {
+                    self.filter_errors += 1;
+                    false
+                }
+            },
+            None => false,
+        };
+        self.corrections += u64::from(corrected);
+        let x = self.localiser.belief().x;
+        self.estimates.push((t.sequence, [x[0], x[1], x[2]]));
+        let command = self.command([x[0], x[1], x[2]]);
+        let p = self.localiser.belief().p;
+        Outcome::Applied(HostStep {
+            sequence: t.sequence,
+            robot_time,
+            skipped: match status {
+                Status::Applied { skipped } => skipped,
+                _ => 0,
+            },
+            estimate: [x[0], x[1], x[2]],
+            variance: [p[(0, 0)], p[(1, 1)], p[(2, 2)]],
+            ir: t.ir,
+            corrected,
+            command,
+        })
+    }
+
+    /// The first packet of a stream (the first, or after the receiver
+    /// re-anchored): it only sets the references.
+    fn start_stream(&mut self, t: &Telemetry) {
+        if self.reference.is_some() {
+            self.clock = ClockEstimator::new(self.cfg.clock_bucket);
+        }
+        self.localiser.set_reference_counts(t.counts);
+        self.reference = Some(Reference::of(t));
+        self.refused = None;
+    }
+
+    /// Checks `t` against the reference `r` and predicts through it, or
+    /// refuses it (recounted as implausible; the belief is kept).
+    fn accept(&mut self, t: &Telemetry, r: &Reference) -> Result<(), Implausible> {
+        let packets = t.sequence.wrapping_sub(r.sequence);
+        if let Err(why) = self.check(t, r, packets) {
+            self.receiver.refuse_applied();
+            let run = match self.refused {
+                Some((prev, run))
+                    if self
+                        .check(t, &prev, t.sequence.wrapping_sub(prev.sequence))
+                        .is_ok() =>
+                {
+                    run + 1
+                }
+                _ => 1,
+            };
+            if run >= RESYNC_AFTER {
+                // The robot's counts or clock moved for good: follow them.
+                self.resync += 1;
+                self.start_stream(t);
+            } else {
+                self.refused = Some((Reference::of(t), run));
+            }
+            return Err(why);
+        }
+        self.refused = None;
+        self.reference = Some(Reference::of(t));
+        // Bounded work: a stream of refused packets cannot make the split
+        // longer than a plausible sequence jump.
+        let parts = packets.min(MAX_JUMP + 1);
+        if self.localiser.counts(t.counts, parts).is_err() {
+            self.filter_errors += 1;
+        }
+        Ok(())
+    }
+
+    /// `t`'s content against the reference `r`, `packets` sequence numbers
+    /// before it.
+    #[allow(clippy::cast_precision_loss)]
+    fn check(&self, t: &Telemetry, r: &Reference, packets: u32) -> Result<(), Implausible> {
+        let elapsed = if t.timestamp_us >= r.timestamp_us {
+            (t.timestamp_us - r.timestamp_us) as f64 * 1e-6
+        } else {
+            -((r.timestamp_us - t.timestamp_us) as f64 * 1e-6)
+        };
+        let odometer = self.localiser.odometer();
+        let travel = odometer
+            .with_reference(r.counts)
+            .travel_since(t.counts)
+            .map_or([0.0; 2], |u| [u.d1, u.d2]);
+        self.cfg
+            .limits
+            .check(elapsed, packets, travel, odometer.wheel().quantum(), t.ir)
+    }
+
+    /// The path controller's wheel speeds `[right, left]` (m/s) for the
+    /// estimate, or `None` once the laps are done.
+    #[allow(clippy::cast_possible_truncation)]
+    fn command(&mut self, [x, y, theta]: [f64; 3]) -> Option<[f32; 2]> {
+        if self.done {
+            return None;
+        }
+        let est = locus_control::Pose::new(x, y, theta);
+        let mut twist = self.controller.command(est);
+        if twist.done {
+            self.laps += 1;
+            if self.laps >= self.cfg.laps {
+                self.done = true;
+                return None;
+            }
+            self.controller.reset();
+            twist = self.controller.command(est);
+        }
+        let (v1, v2) = wheel_speeds(twist, self.cfg.localiser.wheelbase);
+        Some([v1 as f32, v2 as f32])
+    }
+}
+
 /// What a host run did.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HostReport {
-    /// The telemetry receiver's counters.
+    /// The telemetry receiver's counters (see [`Host::counters`]).
     pub counters: Counters,
     /// Estimate after each applied packet `(sequence, [x, y, theta])`.
     pub estimates: Vec<(u32, [f64; 3])>,
@@ -172,6 +447,9 @@ pub struct HostReport {
     pub commands_sent: u64,
     /// IR corrections applied.
     pub corrections: u64,
+    /// Filter errors (the packet's prediction or correction was skipped,
+    /// the belief kept).
+    pub filter_errors: u64,
     /// Wall time from a telemetry packet's reception to its command's send
     /// (s), one per command sent after the handshake.
     pub latency: Vec<f64>,
@@ -181,33 +459,21 @@ pub struct HostReport {
 /// `on_step` after each applied telemetry packet.
 ///
 /// # Errors
-/// [`Error::Timeout`] if no telemetry arrives within `handshake`; socket,
-/// configuration and filter errors.
-#[allow(clippy::cast_possible_truncation, clippy::too_many_lines)]
+/// [`Error::Timeout`] if no telemetry arrives within `handshake`; socket
+/// and configuration errors.
 pub fn run_host(
     socket: &UdpSocket,
     robot: SocketAddr,
     cfg: &HostConfig,
     on_step: &mut impl FnMut(&HostStep),
 ) -> Result<HostReport, Error> {
-    cfg.validate()?;
-    let mut localiser: Localiser<f64> = cfg.localiser.localiser()?;
-    let mut controller = FollowPath::square(cfg.control);
-    let mut receiver = Receiver::new();
-    let mut clock = ClockEstimator::<CLOCK_WINDOW>::new(cfg.clock_bucket);
+    let mut host = Host::new(cfg)?;
     let mut buf = [0u8; 2048];
     let mut out = [0u8; MAX_PACKET];
-    let mut report = HostReport {
-        counters: Counters::default(),
-        estimates: Vec::new(),
-        clock: None,
-        laps: 0,
-        commands_sent: 0,
-        corrections: 0,
-        latency: Vec::new(),
-    };
+    let mut commands_sent = 0u64;
+    let mut latency = Vec::new();
     let mut sequence = 0u32;
-    let mut send = |socket: &UdpSocket, ack: u32, right: f32, left: f32| -> Result<(), Error> {
+    let mut send = |socket: &UdpSocket, ack: u32, [right, left]: [f32; 2]| -> Result<(), Error> {
         let c = CommandPacket {
             sequence,
             ack,
@@ -224,7 +490,6 @@ pub fn run_host(
     let handshake_end = origin + cfg.handshake;
     let mut next_hello = origin;
     let mut last_rx: Option<Instant> = None;
-    let mut done = false;
     loop {
         let now = Instant::now();
         // Waiting for the first packet: resend the hello; else: quiet end.
@@ -234,8 +499,8 @@ pub fn run_host(
                     return Err(Error::Timeout("waiting for the robot's first telemetry"));
                 }
                 if now >= next_hello {
-                    send(socket, NO_ACK, 0.0, 0.0)?;
-                    report.commands_sent += 1;
+                    send(socket, NO_ACK, [0.0, 0.0])?;
+                    commands_sent += 1;
                     next_hello = now + cfg.resend;
                 }
                 next_hello.min(handshake_end) - now
@@ -261,69 +526,34 @@ pub fn run_host(
         if from != robot {
             continue;
         }
-        let Ok((t, status)) = receiver.receive_telemetry(&buf[..n]) else {
-            last_rx.get_or_insert(received);
-            continue;
-        };
-        if last_rx.is_none() && !matches!(status, Status::Applied { .. }) {
-            continue;
-        }
-        last_rx = Some(received);
-        let Status::Applied { skipped } = status else {
-            continue;
-        };
-        let robot_time = t.timestamp_us as f64 * 1e-6;
-        clock.push(robot_time, (received - origin).as_secs_f64());
-        // Predicting through the gap; the first applied packet only sets
-        // the reference counts (and its reading is not used).
-        let predicted = localiser
-            .counts(t.counts, skipped.saturating_add(1))?
-            .is_some();
-        let corrected = match t.ir.filter(|_| predicted && cfg.use_ir) {
-            Some([ds1, ds2]) => localiser
-                .ir(&cfg.walls, [f64::from(ds1), f64::from(ds2)])?
-                .applied(),
-            None => false,
-        };
-        report.corrections += u64::from(corrected);
-        let x = localiser.belief().x;
-        report.estimates.push((t.sequence, [x[0], x[1], x[2]]));
-
-        let mut sent = None;
-        if !done {
-            let est = locus_control::Pose::new(x[0], x[1], x[2]);
-            let mut twist = controller.command(est);
-            if twist.done {
-                report.laps += 1;
-                if report.laps >= cfg.laps {
-                    done = true;
-                } else {
-                    controller.reset();
-                    twist = controller.command(est);
+        match host.receive(&buf[..n], (received - origin).as_secs_f64()) {
+            Outcome::Undecodable => {
+                last_rx.get_or_insert(received);
+            }
+            Outcome::Dropped(_) => {
+                if last_rx.is_some() {
+                    last_rx = Some(received);
                 }
             }
-            if !done {
-                let (v1, v2) = wheel_speeds(twist, cfg.localiser.wheelbase);
-                let (right, left) = (v1 as f32, v2 as f32);
-                send(socket, t.sequence, right, left)?;
-                report.commands_sent += 1;
-                report.latency.push(received.elapsed().as_secs_f64());
-                sent = Some([right, left]);
+            Outcome::Applied(step) => {
+                last_rx = Some(received);
+                if let Some(speeds) = step.command {
+                    send(socket, step.sequence, speeds)?;
+                    commands_sent += 1;
+                    latency.push(received.elapsed().as_secs_f64());
+                }
+                on_step(&step);
             }
         }
-        let p = localiser.belief().p;
-        on_step(&HostStep {
-            sequence: t.sequence,
-            robot_time,
-            skipped,
-            estimate: [x[0], x[1], x[2]],
-            variance: [p[(0, 0)], p[(1, 1)], p[(2, 2)]],
-            ir: t.ir,
-            corrected,
-            command: sent,
-        });
     }
-    report.counters = receiver.counters();
-    report.clock = clock.estimate();
-    Ok(report)
+    Ok(HostReport {
+        counters: host.counters(),
+        clock: host.clock.estimate(),
+        laps: host.laps,
+        commands_sent,
+        corrections: host.corrections,
+        filter_errors: host.filter_errors,
+        latency,
+        estimates: host.estimates,
+    })
 }

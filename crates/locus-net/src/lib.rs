@@ -5,6 +5,8 @@
 //!   the protocol: decode, classify, predict (through gaps), correct with
 //!   the IR pair, run the path controller, send commands; it reports the
 //!   receiver's counters and the clock estimate.
+//! - [`plausible`]: the limits a telemetry packet's content must respect
+//!   before it touches the filter.
 //! - The UDP plumbing every endpoint shares: the [`Error`] type,
 //!   [`at_least_1us`] and [`is_timeout`]. The simulated robot endpoint
 //!   (`locus_sim::link_robot`) builds on them.
@@ -14,6 +16,7 @@
 //! put a proxy between the endpoints.
 
 pub mod host;
+pub mod plausible;
 
 use core::time::Duration;
 

@@ -99,6 +99,38 @@ pub struct RobotConfig {
     pub idle_exit: f64,
     /// Wall time to wait for the host's first command. Default 10 s.
     pub handshake: Duration,
+    /// The wheels' top speed (m/s): a commanded speed beyond it is clamped
+    /// to it (and counted), as a motor driver saturates. Default 1 m/s.
+    pub max_wheel_speed: f64,
+}
+
+impl RobotConfig {
+    /// Checks every timing and limit value.
+    ///
+    /// # Errors
+    /// [`locus_net::Error::Config`] (as [`Error::Link`]) naming the first
+    /// invalid value; the scenario's own errors.
+    pub fn validate(&self) -> Result<(), Error> {
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        let checks = [
+            (pos(self.time_scale), "time_scale must be finite and > 0"),
+            (pos(self.watchdog), "watchdog must be finite and > 0 s"),
+            (pos(self.idle_exit), "idle_exit must be finite and > 0 s"),
+            (
+                self.idle_exit >= self.watchdog,
+                "idle_exit must be at least the watchdog (s)",
+            ),
+            (
+                pos(self.max_wheel_speed),
+                "max_wheel_speed must be finite and > 0 m/s",
+            ),
+        ];
+        if let Some((_, what)) = checks.into_iter().find(|(ok, _)| !ok) {
+            return Err(LinkError::Config(what).into());
+        }
+        self.square.validate()?;
+        Ok(())
+    }
 }
 
 impl Default for RobotConfig {
@@ -110,6 +142,7 @@ impl Default for RobotConfig {
             watchdog: 0.2,
             idle_exit: 2.0,
             handshake: Duration::from_secs(10),
+            max_wheel_speed: 1.0,
         }
     }
 }
@@ -126,6 +159,9 @@ pub struct RobotReport {
     pub commands: locus_link::Counters,
     /// Times the watchdog stopped the wheels.
     pub watchdog_stops: u64,
+    /// Commands applied with a wheel speed beyond `max_wheel_speed`
+    /// (clamped to it).
+    pub clamped: u64,
     /// Ticks whose command answered the previous telemetry packet (ack
     /// `k - 1` at tick `k`): the lockstep share is `on_time / ticks`.
     pub on_time: u64,
@@ -219,9 +255,7 @@ impl Sim {
 #[allow(clippy::cast_precision_loss, clippy::cast_possible_truncation)]
 #[allow(clippy::cast_sign_loss, clippy::too_many_lines)]
 pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, Error> {
-    if !(cfg.time_scale.is_finite() && cfg.time_scale > 0.0) {
-        return Err(LinkError::Config("time_scale must be finite and > 0").into());
-    }
+    cfg.validate()?;
     let dt = cfg.square.dt;
     let mut sim = Sim::new(&cfg.square, cfg.seed)?;
     let mut receiver = Receiver::new();
@@ -239,7 +273,7 @@ pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, E
         match socket.recv_from(&mut buf) {
             Ok((n, from)) => {
                 if let Ok((c, Status::Applied { .. })) = receiver.receive_command(&buf[..n]) {
-                    break (from, c);
+                    break (from, clamp(c, cfg.max_wheel_speed));
                 }
             }
             Err(e) if is_timeout(&e) => {}
@@ -252,6 +286,7 @@ pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, E
         sent: 0,
         commands: receiver.counters(),
         watchdog_stops: 0,
+        clamped: 0,
         on_time: 0,
         ticks: 0,
         sim_time: 0.0,
@@ -276,7 +311,8 @@ pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, E
             match socket.recv_from(&mut buf) {
                 Ok((n, from)) => {
                     if let Ok((c, Status::Applied { .. })) = receiver.receive_command(&buf[..n]) {
-                        command = c;
+                        command = clamp(c, cfg.max_wheel_speed);
+                        report.clamped += u64::from(command != c);
                         host = from;
                         last_command_time = robot_time_prev;
                     }
@@ -325,4 +361,15 @@ pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, E
     socket.set_nonblocking(false)?;
     report.commands = receiver.counters();
     Ok(report)
+}
+
+/// `c` with both wheel speeds clamped to `[-max, max]` (m/s).
+#[allow(clippy::cast_possible_truncation)]
+fn clamp(c: CommandPacket, max: f64) -> CommandPacket {
+    let max = max as f32;
+    CommandPacket {
+        right: c.right.clamp(-max, max),
+        left: c.left.clamp(-max, max),
+        ..c
+    }
 }

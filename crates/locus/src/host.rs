@@ -74,6 +74,15 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             "packets corrupt / malformed [count]",
             format!("{} / {}", c.corrupt, c.malformed),
         ),
+        (
+            "packets suspect (sequence) / implausible (content) [count]",
+            format!("{} / {}", c.suspect, c.implausible),
+        ),
+        ("resynchronisations [count]", c.resync.to_string()),
+        (
+            "filter errors (belief kept) [count]",
+            report.filter_errors.to_string(),
+        ),
         ("commands sent [count]", report.commands_sent.to_string()),
         (
             "IR corrections applied [count]",

@@ -26,20 +26,42 @@ pub struct Args {
     /// Robot seconds per wall second (> 0; > 1 runs faster than real time).
     #[arg(long, default_value_t = 1.0)]
     time_scale: f64,
-    /// Robot time without a command after which the wheels stop (s).
+    /// Robot time without a command after which the wheels stop (s, > 0).
     #[arg(long, default_value_t = 0.2)]
     watchdog: f64,
-    /// Robot time without a command after which the run ends (s).
+    /// Robot time without a command after which the run ends (s, at least
+    /// the watchdog).
     #[arg(long, default_value_t = 2.0)]
     idle_exit: f64,
-    /// Wall time to wait for the host's first command (s).
+    /// Wall time to wait for the host's first command (s, >= 0).
     #[arg(long, default_value_t = 60.0)]
     handshake: f64,
+    /// The wheels' top speed (m/s, > 0): faster commanded speeds are
+    /// clamped to it and counted.
+    #[arg(long, default_value_t = 1.0)]
+    max_wheel_speed: f64,
 }
 
 /// Runs `locus robot`.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let square = square_config(&args.scenario)?;
+    let handshake = if args.handshake.is_finite() {
+        Duration::try_from_secs_f64(args.handshake).ok()
+    } else {
+        None
+    }
+    .context("--handshake must be a finite, non-negative number of seconds")?;
+    let cfg = RobotConfig {
+        square,
+        seed: args.seed,
+        time_scale: args.time_scale,
+        watchdog: args.watchdog,
+        idle_exit: args.idle_exit,
+        handshake,
+        max_wheel_speed: args.max_wheel_speed,
+    };
+    // Every flag is checked before the socket is bound.
+    cfg.validate().context("locus robot: invalid setting")?;
     let socket = UdpSocket::bind(&args.udp).with_context(|| format!("binding UDP {}", args.udp))?;
     eprintln!(
         "locus robot: {} listening on {} (time scale {}); waiting for a host",
@@ -47,19 +69,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         socket.local_addr()?,
         args.time_scale
     );
-    let cfg = RobotConfig {
-        square,
-        seed: args.seed,
-        time_scale: args.time_scale,
-        watchdog: args.watchdog,
-        idle_exit: args.idle_exit,
-        handshake: Duration::try_from_secs_f64(args.handshake)
-            .context("--handshake must be a non-negative number of seconds")?,
-    };
     let r = run_robot(&socket, &cfg)?;
     let c = r.commands;
     println!(
-        "locus robot: {} ticks ({:.2} s robot time), {} telemetry packets sent; commands applied {} / lost {} / duplicate {} / late {} / corrupt {} / malformed {}; on time {:.1} %; watchdog stops {}",
+        "locus robot: {} ticks ({:.2} s robot time), {} telemetry packets sent; commands applied {} / lost {} / duplicate {} / late {} / corrupt {} / malformed {} / suspect {}; clamped {}; on time {:.1} %; watchdog stops {}",
         r.ticks,
         r.sim_time,
         r.sent,
@@ -69,6 +82,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         c.late,
         c.corrupt,
         c.malformed,
+        c.suspect,
+        r.clamped,
         100.0 * r.on_time as f64 / r.ticks.max(1) as f64,
         r.watchdog_stops
     );
