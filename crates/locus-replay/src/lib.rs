@@ -251,7 +251,7 @@ fn apply(
         Event::Sighting(z, _) => Some(match log.landmark(z.landmark) {
             None => SightingOutcome::NotInMap,
             // Also NaN, should a log ever hold one.
-            Some(_) if !(z.range <= cfg.max_range) => {
+            Some(_) if z.range.is_nan() || z.range > cfg.max_range => {
                 SightingOutcome::Unusable(Unusable::RangeAbove { max: cfg.max_range })
             }
             Some(l) => {
