@@ -3,7 +3,7 @@
 //! false figure. One test per class of bad input, each named for the bug
 //! it guards.
 
-use std::fmt::Write as _;
+use core::fmt::Write as _;
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
