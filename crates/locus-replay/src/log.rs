@@ -84,10 +84,15 @@ impl core::fmt::Display for TimeProblem {
                 f,
                 "more than {TIME_TOLERANCE} s after the last odometry record ({last} s)"
             ),
-            TimeProblem::AheadOfNeighbours { previous, next } => write!(
+            TimeProblem::AheadOfNeighbours { previous, next } if previous.is_finite() => write!(
                 f,
                 "more than {TIME_TOLERANCE} s ahead of the measurements listed before \
                  ({previous} s) and after it ({next} s)"
+            ),
+            TimeProblem::AheadOfNeighbours { next, .. } => write!(
+                f,
+                "the first measurement listed, more than {TIME_TOLERANCE} s ahead of the \
+                 one listed after it ({next} s)"
             ),
         }
     }

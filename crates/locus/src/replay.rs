@@ -298,7 +298,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
                 "{}: sighting of landmark {} at {} s refused: implausible time stamp, {}",
                 place(&log.name, r.line),
                 r.landmark,
-                r.time,
+                number(r.time),
                 r.problem
             )
         })
@@ -315,9 +315,9 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
                  the filter cannot use it: {why}",
                 place(&log.name, line),
                 sighting.landmark,
-                sighting.time,
-                sighting.range,
-                sighting.bearing
+                number(sighting.time),
+                number(sighting.range),
+                number(sighting.bearing)
             ));
         }
         if step.index % 4096 == 0 {
@@ -419,6 +419,16 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
 /// line is not known (an MRCLAM log).
 fn place(name: &str, line: Option<usize>) -> String {
     line.map_or_else(|| name.to_string(), |l| format!("{name}:{l}"))
+}
+
+/// A logged value for a message: as written if of ordinary size, else in
+/// scientific notation (a range of 1e154 m is not spelt out in 155 digits).
+fn number(v: f64) -> String {
+    if v == 0.0 || (1e-4..1e12).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
 }
 
 /// Sightings refused listed at most.
