@@ -353,6 +353,56 @@ mod tests {
     }
 
     #[test]
+    fn implausible_times_are_the_future_and_lone_spikes_not_late_lines() {
+        let kinds = |times: &[f64]| -> Vec<Option<&'static str>> {
+            time_problems(times, Some(10.0))
+                .iter()
+                .map(|p| {
+                    p.map(|p| match p {
+                        TimeProblem::AfterOdometry { .. } => "after",
+                        TimeProblem::AheadOfNeighbours { .. } => "spike",
+                    })
+                })
+                .collect()
+        };
+        // In order, late lines (going back, even by more than the window),
+        // a jump ahead that the next lines follow, up to 1 s past the end.
+        assert_eq!(kinds(&[1.0, 2.0, 1.5, 3.0, 0.5, 6.0, 6.5, 11.0]), [None; 8]);
+        // Beyond the odometry by more than 1 s: refused wherever listed,
+        // and not taken as the arrival of the lines after it.
+        assert_eq!(
+            kinds(&[1.0, 1e6, 1e6, 2.0, 11.5]),
+            [None, Some("after"), Some("after"), None, Some("after")]
+        );
+        // Ahead of both neighbours by more than 1 s: a lone spike.
+        assert_eq!(
+            kinds(&[1.0, 8.0, 2.0, 3.0]),
+            [None, Some("spike"), None, None]
+        );
+        assert_eq!(kinds(&[8.0, 2.0, 3.0]), [Some("spike"), None, None]);
+        // Without odometry only the spike rule applies.
+        assert_eq!(time_problems(&[1.0, 1e6], None), [None, None]);
+    }
+
+    #[test]
+    fn refused_lines_are_left_out_with_their_line_and_the_arrivals_stay_true() {
+        let text = "landmark,6,1,2\nodometry,0,0,0\nodometry,10,0,0\n\
+                    measurement,1,6,2,0.1\nmeasurement,1000000,6,2,0.1\nmeasurement,2,6,2,0.1\n";
+        let (csv, lines) = locus_csv::parse_with_lines(text, Path::new("t.csv")).unwrap();
+        assert_eq!(lines, [4, 5, 6]);
+        let log = Log::from_locus_lines("t", csv, &lines);
+        assert_eq!(log.sighting_lines, [4, 6]);
+        assert_eq!(log.sightings.len(), 2);
+        assert_eq!(log.sightings[1].arrival, 2.0, "not 1e6");
+        assert_eq!(log.refused_times.len(), 1);
+        assert_eq!(log.refused_times[0].line, Some(5));
+        assert_eq!(
+            log.refused_times[0].problem,
+            TimeProblem::AfterOdometry { last: 10.0 }
+        );
+    }
+
+    #[test]
     fn sensor_and_noise_pass_through_both_ways() {
         let csv = parse(
             "sensor,0.1,-0.05,0.2\nnoise,q_v,0.02\nnoise,sigma_bearing,0.05\n\
