@@ -8,7 +8,8 @@
 use std::io;
 use std::path::PathBuf;
 
-/// What is wrong with one field of a record.
+/// What is wrong with one field of a record. The text of a field is quoted
+/// by [`excerpt`]: at most [`EXCERPT_BYTES`] of it.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
 pub enum FieldProblem {
@@ -76,6 +77,25 @@ pub enum RecordProblem {
     },
 }
 
+/// Bytes of a field's text quoted in an error at most: a field of
+/// megabytes is quoted by its start and its length, not echoed whole.
+pub const EXCERPT_BYTES: usize = 32;
+
+/// `text` as an error quotes it: whole if at most [`EXCERPT_BYTES`] long,
+/// else its first [`EXCERPT_BYTES`] bytes (cut at a character boundary),
+/// an ellipsis and the length in bytes.
+#[must_use]
+pub fn excerpt(text: &str) -> String {
+    if text.len() <= EXCERPT_BYTES {
+        return text.to_owned();
+    }
+    let mut end = EXCERPT_BYTES;
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    format!("{}... ({} bytes)", &text[..end], text.len())
+}
+
 /// Errors of the log readers.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -88,6 +108,15 @@ pub enum Error {
         /// The underlying error.
         #[source]
         source: io::Error,
+    },
+    /// The path exists but is not a regular file (a directory, a FIFO, a
+    /// socket, a device): it is not read.
+    #[error("{}: {what}, not a log file", path.display())]
+    NotAFile {
+        /// The path.
+        path: PathBuf,
+        /// What it is: "is a directory" or "is not a regular file (a FIFO)".
+        what: &'static str,
     },
     /// Neither the file nor its `.xz`-compressed form exists.
     #[error("{}: not found (nor {}.xz)", path.display(), path.display())]

@@ -24,11 +24,11 @@
 use std::path::{Path, PathBuf};
 
 use crate::decimal::push_f64;
-use crate::error::{Error, FieldProblem, RecordProblem, Result};
+use crate::error::{FieldProblem, RecordProblem, Result, excerpt};
 use crate::mrclam::{Groundtruth, Odometry, TruthPose};
 use crate::noise::NoiseRecords;
 use crate::sensor::SensorMount;
-use crate::text::{TimeOrder, csv_records, read_text};
+use crate::text::{TimeOrder, csv_records, existing, read_text};
 
 /// A landmark of the map: an id and a position.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -92,9 +92,21 @@ const NOISE_WHAT: [&str; 4] = [
 /// Parses the text of a Locus log; `path` names it in errors.
 ///
 /// # Errors
-/// A malformed line ([`Error::Field`], [`Error::Record`]) with its line.
+/// A malformed line ([`crate::Error::Field`], [`crate::Error::Record`])
+/// with its line.
 pub fn parse(text: &str, path: &Path) -> Result<LocusLog> {
+    parse_with_lines(text, path).map(|(log, _)| log)
+}
+
+/// As [`parse`], with the line (1-based) of each measurement, in the order
+/// of [`LocusLog::measurements`]: what a reader of the log names when it
+/// refuses one.
+///
+/// # Errors
+/// As [`parse`].
+pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Vec<usize>)> {
     let mut log = LocusLog::default();
+    let mut measurement_lines: Vec<usize> = Vec::new();
     let mut landmark_lines: Vec<usize> = Vec::new();
     let mut odometry_order = TimeOrder::new();
     let mut truth_order = TimeOrder::new();
@@ -129,7 +141,7 @@ pub fn parse(text: &str, path: &Path) -> Result<LocusLog> {
                     return Err(f.field_error(
                         "name",
                         FieldProblem::OutOfRange {
-                            value: name.to_owned(),
+                            value: excerpt(name),
                             expected: NOISE_NAMES,
                         },
                     ));
@@ -195,6 +207,7 @@ pub fn parse(text: &str, path: &Path) -> Result<LocusLog> {
                 };
                 f.end(5)?;
                 log.measurements.push(m);
+                measurement_lines.push(line);
             }
             "truth" => {
                 let p = pose(&mut f)?;
@@ -206,7 +219,7 @@ pub fn parse(text: &str, path: &Path) -> Result<LocusLog> {
                 return Err(f.field_error(
                     "kind",
                     FieldProblem::OutOfRange {
-                        value: other.to_owned(),
+                        value: excerpt(other),
                         expected: KINDS,
                     },
                 ));
@@ -215,7 +228,7 @@ pub fn parse(text: &str, path: &Path) -> Result<LocusLog> {
     }
     // Times were checked not to decrease.
     log.truth = Groundtruth::new(truth).unwrap_or_default();
-    Ok(log)
+    Ok((log, measurement_lines))
 }
 
 fn pose(f: &mut crate::text::Fields<'_>) -> Result<TruthPose> {
@@ -232,27 +245,24 @@ fn pose(f: &mut crate::text::Fields<'_>) -> Result<TruthPose> {
 /// decompressed.
 ///
 /// # Errors
-/// [`Error::NotFound`] naming the file if neither exists; read,
-/// decompression and parse errors naming the file (and line).
+/// [`crate::Error::NotFound`] naming the file if neither exists;
+/// [`crate::Error::NotAFile`] for a directory, FIFO, socket or device
+/// (never opened); [`crate::Error::Io`] with the system's reason (a loop of
+/// symbolic links, no permission); read, decompression and parse errors
+/// naming the file (and line).
 pub fn read(path: &Path) -> Result<LocusLog> {
-    let file = existing(path)?;
-    parse(&read_text(&file)?, &file)
+    read_with_lines(path).map(|(log, _, _)| log)
 }
 
-/// `path` if it is a file, else `path.xz` if that is.
-fn existing(path: &Path) -> Result<PathBuf> {
-    if path.is_file() {
-        return Ok(path.to_path_buf());
-    }
-    let mut xz = path.as_os_str().to_owned();
-    xz.push(".xz");
-    let xz = PathBuf::from(xz);
-    if xz.is_file() {
-        return Ok(xz);
-    }
-    Err(Error::NotFound {
-        path: path.to_path_buf(),
-    })
+/// As [`read`], with the line of each measurement (as
+/// [`parse_with_lines`]) and the file actually read (`path` or `path.xz`).
+///
+/// # Errors
+/// As [`read`].
+pub fn read_with_lines(path: &Path) -> Result<(LocusLog, Vec<usize>, PathBuf)> {
+    let file = existing(path)?;
+    let (log, lines) = parse_with_lines(&read_text(&file)?, &file)?;
+    Ok((log, lines, file))
 }
 
 /// Writes a log in this format (the inverse of [`parse`]; numbers as
@@ -307,6 +317,7 @@ fn record(s: &mut String, head: &str, values: &[f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Error;
 
     fn p() -> &'static Path {
         Path::new("log.csv")

@@ -6,20 +6,79 @@ use core::str::{Split, SplitAsciiWhitespace};
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use crate::error::{Error, FieldProblem, RecordProblem, Result};
+use crate::error::{Error, FieldProblem, RecordProblem, Result, excerpt};
 use crate::xz::{self, XZ_MAGIC};
 
 /// `dir/name` if it exists, else `dir/name.xz` if that exists.
+///
+/// # Errors
+/// As [`existing`].
 pub(crate) fn resolve(dir: &Path, name: &str) -> Result<PathBuf> {
-    let plain = dir.join(name);
-    if plain.is_file() {
-        return Ok(plain);
+    existing(&dir.join(name))
+}
+
+/// `path` if it exists, else `path.xz` if that exists; either must be a
+/// regular file (symbolic links followed).
+///
+/// # Errors
+/// [`Error::NotFound`] if neither exists; [`Error::NotAFile`] for a
+/// directory, a FIFO, a socket or a device (a FIFO is never opened, so a
+/// reader never waits on it); [`Error::Io`] with the system's reason for
+/// a path that cannot be examined (a loop of symbolic links, no
+/// permission).
+pub(crate) fn existing(path: &Path) -> Result<PathBuf> {
+    if regular_file(path)? {
+        return Ok(path.to_path_buf());
     }
-    let xz = dir.join(format!("{name}.xz"));
-    if xz.is_file() {
+    let mut xz = path.as_os_str().to_owned();
+    xz.push(".xz");
+    let xz = PathBuf::from(xz);
+    if regular_file(&xz)? {
         return Ok(xz);
     }
-    Err(Error::NotFound { path: plain })
+    Err(Error::NotFound {
+        path: path.to_path_buf(),
+    })
+}
+
+/// Whether `path` is a regular file (`false` if nothing is there).
+fn regular_file(path: &Path) -> Result<bool> {
+    match fs::metadata(path) {
+        Ok(m) if m.is_file() => Ok(true),
+        Ok(m) => Err(Error::NotAFile {
+            path: path.to_path_buf(),
+            what: if m.is_dir() {
+                "is a directory"
+            } else {
+                special_kind(&m.file_type())
+            },
+        }),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(false),
+        Err(source) => Err(Error::Io {
+            path: path.to_path_buf(),
+            source,
+        }),
+    }
+}
+
+/// What a special file is, as [`Error::NotAFile`] says it.
+#[cfg(unix)]
+fn special_kind(t: &fs::FileType) -> &'static str {
+    use std::os::unix::fs::FileTypeExt as _;
+    if t.is_fifo() {
+        "is not a regular file (a FIFO)"
+    } else if t.is_socket() {
+        "is not a regular file (a socket)"
+    } else if t.is_block_device() || t.is_char_device() {
+        "is not a regular file (a device)"
+    } else {
+        "is not a regular file"
+    }
+}
+
+#[cfg(not(unix))]
+fn special_kind(_: &fs::FileType) -> &'static str {
+    "is not a regular file"
 }
 
 /// The text of a file, decompressed if it is an xz stream (by its `.xz`
@@ -151,8 +210,8 @@ impl<'a> Fields<'a> {
         let text = self.next_text(field)?;
         match text.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
-            Ok(_) => Err(self.field_error(field, FieldProblem::NotFinite(text.to_owned()))),
-            Err(_) => Err(self.field_error(field, FieldProblem::NotANumber(text.to_owned()))),
+            Ok(_) => Err(self.field_error(field, FieldProblem::NotFinite(excerpt(text)))),
+            Err(_) => Err(self.field_error(field, FieldProblem::NotANumber(excerpt(text)))),
         }
     }
 
@@ -192,7 +251,7 @@ impl<'a> Fields<'a> {
     pub(crate) fn u32(&mut self, field: &'static str) -> Result<u32> {
         let text = self.next_text(field)?;
         text.parse::<u32>()
-            .map_err(|_| self.field_error(field, FieldProblem::NotAnInteger(text.to_owned())))
+            .map_err(|_| self.field_error(field, FieldProblem::NotAnInteger(excerpt(text))))
     }
 
     /// Checks that no field is left (the format has `columns` columns).

@@ -71,9 +71,9 @@ use locus_models::range_bearing::RangeBearing;
 use locus_models::unicycle::{Unicycle, Velocities};
 
 pub use config::{Calibration, Config};
-pub use log::{Landmark, Log, Sighting};
+pub use log::{Landmark, Log, RefusedTime, Sighting, TIME_TOLERANCE, TimeProblem};
 pub use report::Report;
-pub use step::{EventKind, SightingOutcome, Step};
+pub use step::{EventKind, SightingOutcome, Step, Unusable};
 
 /// Cap on one sighting's NIS in [`Report::innovation_nll`]: the 99.9 %
 /// point of chi-square with 2 degrees of freedom, `-2 ln 0.001`.
@@ -136,14 +136,16 @@ pub enum Error {
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Event {
     Odometry(Odometry),
-    Sighting(Sighting),
+    /// A sighting and its line in the log file, if known (not part of the
+    /// order).
+    Sighting(Sighting, Option<usize>),
 }
 
 impl Event {
     fn time(&self) -> f64 {
         match self {
             Event::Odometry(o) => o.time,
-            Event::Sighting(s) => s.time,
+            Event::Sighting(s, _) => s.time,
         }
     }
 
@@ -157,9 +159,9 @@ impl Event {
         }
         match (self, other) {
             (Event::Odometry(_), Event::Odometry(_)) => Ordering::Equal,
-            (Event::Odometry(_), Event::Sighting(_)) => Ordering::Less,
-            (Event::Sighting(_), Event::Odometry(_)) => Ordering::Greater,
-            (Event::Sighting(a), Event::Sighting(b)) => a
+            (Event::Odometry(_), Event::Sighting(..)) => Ordering::Less,
+            (Event::Sighting(..), Event::Odometry(_)) => Ordering::Greater,
+            (Event::Sighting(a, _), Event::Sighting(b, _)) => a
                 .landmark
                 .cmp(&b.landmark)
                 .then(a.range.total_cmp(&b.range))
@@ -246,8 +248,12 @@ fn apply(
             track.extra.omega = o.omega;
             None
         }
-        Event::Sighting(z) => Some(match log.landmark(z.landmark) {
+        Event::Sighting(z, _) => Some(match log.landmark(z.landmark) {
             None => SightingOutcome::NotInMap,
+            // Also NaN, should a log ever hold one.
+            Some(_) if z.range.is_nan() || z.range > cfg.max_range => {
+                SightingOutcome::Unusable(Unusable::RangeAbove { max: cfg.max_range })
+            }
             Some(l) => {
                 let model = CalibratedRangeBearing {
                     inner: RangeBearing::new(
@@ -260,8 +266,20 @@ fn apply(
                 };
                 let z = Vector2::new(z.range, z.bearing);
                 let update = match cfg.robust_dof.map(StudentT::new) {
-                    Some(Ok(t)) => track.correct_robust(rules, &t, &model, &z)?,
-                    _ => track.correct(rules, &model, &z)?,
+                    Some(Ok(t)) => track.correct_robust(rules, &t, &model, &z),
+                    _ => track.correct(rules, &model, &z),
+                };
+                // A correction that fails on the sighting (not on the
+                // belief) refuses it; the track is then unchanged.
+                let update = match update {
+                    Ok(u) => u,
+                    Err(e) => match Unusable::of(e) {
+                        Some(why) => {
+                            entry.outcome = Some(SightingOutcome::Unusable(why));
+                            return Ok(());
+                        }
+                        None => return Err(e),
+                    },
                 };
                 if let Some(first) = update.first_attempt() {
                     entry.nll = 0.5 * first.s.determinant().ln() + 0.5 * first.nis.min(NIS_CAP);
@@ -360,7 +378,7 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
                     omega: o.omega,
                 }
             }
-            Event::Sighting(sighting) => {
+            Event::Sighting(sighting, line) => {
                 let outcome = e.outcome.unwrap_or(SightingOutcome::NoMeasurement);
                 let r = &mut self.report;
                 r.sightings += 1;
@@ -375,8 +393,13 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
                     SightingOutcome::Gated { .. } => r.gated += 1,
                     SightingOutcome::NotInMap => r.not_in_map += 1,
                     SightingOutcome::NoMeasurement => r.no_measurement += 1,
+                    SightingOutcome::Unusable(_) => r.unusable += 1,
                 }
-                EventKind::Sighting { sighting, outcome }
+                EventKind::Sighting {
+                    sighting,
+                    outcome,
+                    line,
+                }
             }
         };
         self.report.inflations += e.inflations as usize;
@@ -444,12 +467,45 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             }
             (self.sink)(step);
         }
-        self.report.smoothed = Some(tally.summary(0));
+        self.report.smoothed = Some(honest(tally.summary(0), &self.report));
         self.report.smoothed_calibration = first_calibration;
         self.held = Vec::new();
         self.nodes = Vec::new();
         Ok(())
     }
+}
+
+/// `s` (a tally of the steps compared with the truth) made honest for a
+/// replay: with no step compared, every figure that needs the truth is NaN
+/// ("n/a", `null`), not 0; the counts of readings, associated and applied
+/// sightings are the replay's own over every sighting (`r`), which do not
+/// need the truth.
+fn honest(mut s: locus_eval::Summary, r: &Report) -> locus_eval::Summary {
+    if s.steps == 0 {
+        s.ekf_position_rmse = f64::NAN;
+        s.ekf_heading_rmse = f64::NAN;
+        s.ekf_max_position_error = f64::NAN;
+        s.odometry_position_rmse = f64::NAN;
+        s.odometry_heading_rmse = f64::NAN;
+        s.odometry_max_position_error = f64::NAN;
+        s.mean_nees = f64::NAN;
+        s.nees_in_interval = f64::NAN;
+        s.within_3_sigma = [f64::NAN; 3];
+        // The time compared, over the wall clock.
+        s.sim_time = f64::NAN;
+        s.real_time_factor = f64::NAN;
+    }
+    s.readings = r.sightings;
+    s.associated = r.applied + r.gated;
+    s.corrections = r.applied;
+    #[allow(clippy::cast_precision_loss)]
+    let acceptance = if s.associated > 0 {
+        s.corrections as f64 / s.associated as f64
+    } else {
+        f64::NAN
+    };
+    s.acceptance = acceptance;
+    s
 }
 
 /// Replays `log` with `cfg`, handing each step (in canonical time order,
@@ -555,6 +611,8 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
             recovered: 0,
             not_in_map: 0,
             no_measurement: 0,
+            unusable: 0,
+            implausible_time: log.refused_times.len(),
             robot_sightings: log.robot_sightings,
             unknown_sightings: log.unknown_sightings,
             late: 0,
@@ -570,10 +628,10 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
         sink,
     };
     let mut odometry = log.odometry.iter().peekable();
-    let mut sightings = log.sightings.iter().peekable();
+    let mut sightings = log.sightings.iter().enumerate().peekable();
     loop {
         let take_odometry = match (odometry.peek(), sightings.peek()) {
-            (Some(o), Some(s)) => o.time + cfg.odometry_delay <= s.arrival,
+            (Some(o), Some((_, s))) => o.time + cfg.odometry_delay <= s.arrival,
             (Some(_), None) => true,
             (None, Some(_)) => false,
             (None, None) => break,
@@ -587,7 +645,7 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
                 engine.finalise_before(o.time - cfg.horizon);
                 engine.insert(Event::Odometry(o))?;
             }
-        } else if let Some(s) = sightings.next() {
+        } else if let Some((i, s)) = sightings.next() {
             engine.finalise_before(s.arrival - cfg.horizon);
             // With a delay within the horizon, every finalised event is
             // older than the sighting, so the base is never re-run.
@@ -596,7 +654,7 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
                 continue;
             }
             let late = s.time < engine.filter.time();
-            engine.insert(Event::Sighting(*s))?;
+            engine.insert(Event::Sighting(*s, log.sighting_lines.get(i).copied()))?;
             engine.report.late += usize::from(late);
         }
     }
@@ -604,7 +662,7 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
     let last = engine.filter.base().belief;
     engine.report.final_belief = pose_belief(&last);
     engine.report.calibration = calibration_of(&last);
-    engine.report.summary = engine.tally.summary(0);
+    engine.report.summary = honest(engine.tally.summary(0), &engine.report);
     engine.smooth_and_flush()?;
     Ok(engine.report)
 }

@@ -41,6 +41,102 @@ pub struct Log {
     pub sensor: SensorMount,
     /// The noise levels the log declares (none for MRCLAM).
     pub noise: NoiseRecords,
+    /// The line of each sighting in its file, in the order of
+    /// [`Log::sightings`] (a Locus CSV log read from a file); empty if not
+    /// known.
+    pub sighting_lines: Vec<usize>,
+    /// Sightings refused because their time stamp is implausible
+    /// ([`TIME_TOLERANCE`]), left out of [`Log::sightings`].
+    pub refused_times: Vec<RefusedTime>,
+}
+
+/// How far a sighting's time may lie beyond the last odometry record, or
+/// ahead of the measurements listed on both sides of it, s: the replay's
+/// default re-run window ([`Config::horizon`](crate::Config::horizon)). A
+/// time beyond it is implausible (see [`TimeProblem`]).
+pub const TIME_TOLERANCE: f64 = 1.0;
+
+/// Why a sighting's time stamp is implausible.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TimeProblem {
+    /// More than [`TIME_TOLERANCE`] after the last odometry record: the
+    /// filter has no motion to carry the estimate there, and every
+    /// sighting listed after it would be taken as arriving that late.
+    AfterOdometry {
+        /// The last odometry time, s.
+        last: f64,
+    },
+    /// More than [`TIME_TOLERANCE`] ahead both of every measurement listed
+    /// before it and of the one listed next: not a late measurement, and
+    /// taken as arriving then it would make the next ones too late.
+    AheadOfNeighbours {
+        /// The latest time listed before it, s.
+        previous: f64,
+        /// The time listed next, s.
+        next: f64,
+    },
+}
+
+impl core::fmt::Display for TimeProblem {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            TimeProblem::AfterOdometry { last } => write!(
+                f,
+                "more than {TIME_TOLERANCE} s after the last odometry record ({last} s)"
+            ),
+            TimeProblem::AheadOfNeighbours { previous, next } if previous.is_finite() => write!(
+                f,
+                "more than {TIME_TOLERANCE} s ahead of the measurements listed before \
+                 ({previous} s) and after it ({next} s)"
+            ),
+            TimeProblem::AheadOfNeighbours { next, .. } => write!(
+                f,
+                "the first measurement listed, more than {TIME_TOLERANCE} s ahead of the \
+                 one listed after it ({next} s)"
+            ),
+        }
+    }
+}
+
+/// A sighting refused for its time stamp.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RefusedTime {
+    /// Its line in the file, if known.
+    pub line: Option<usize>,
+    /// Its time stamp, s.
+    pub time: f64,
+    /// The landmark's id.
+    pub landmark: u32,
+    /// Why it is implausible.
+    pub problem: TimeProblem,
+}
+
+/// For each measurement time (in the order listed), whether it is
+/// implausible: after `last_odometry` (if any) by more than
+/// [`TIME_TOLERANCE`], or ahead by more than that of the latest plausible
+/// time listed before it and of the time listed next.
+fn time_problems(times: &[f64], last_odometry: Option<f64>) -> Vec<Option<TimeProblem>> {
+    let mut latest = f64::NEG_INFINITY;
+    let mut out = Vec::with_capacity(times.len());
+    for (i, &t) in times.iter().enumerate() {
+        let problem = match (last_odometry, times.get(i + 1)) {
+            (Some(last), _) if t > last + TIME_TOLERANCE => {
+                Some(TimeProblem::AfterOdometry { last })
+            }
+            (_, Some(&next)) if t > latest + TIME_TOLERANCE && t > next + TIME_TOLERANCE => {
+                Some(TimeProblem::AheadOfNeighbours {
+                    previous: latest,
+                    next,
+                })
+            }
+            _ => None,
+        };
+        if problem.is_none() {
+            latest = latest.max(t);
+        }
+        out.push(problem);
+    }
+    out
 }
 
 impl Log {
@@ -68,17 +164,28 @@ impl Log {
                 y: l.y,
             })
             .collect();
-        let sightings = split
-            .landmarks
-            .iter()
-            .map(|s| Sighting {
+        let times: Vec<f64> = split.landmarks.iter().map(|s| s.time).collect();
+        let problems = time_problems(&times, odometry.last().map(|o| o.time));
+        let mut sightings = Vec::with_capacity(split.landmarks.len());
+        let mut refused_times = Vec::new();
+        for (s, problem) in split.landmarks.iter().zip(problems) {
+            if let Some(problem) = problem {
+                refused_times.push(RefusedTime {
+                    line: None,
+                    time: s.time,
+                    landmark: s.subject,
+                    problem,
+                });
+                continue;
+            }
+            sightings.push(Sighting {
                 time: s.time,
                 arrival: s.time,
                 landmark: s.subject,
                 range: s.range,
                 bearing: s.bearing,
-            })
-            .collect();
+            });
+        }
         let name = dataset.dir().file_name().map_or_else(
             || "MRCLAM".to_string(),
             |n| n.to_string_lossy().into_owned(),
@@ -94,6 +201,8 @@ impl Log {
             unknown_sightings: split.unknown.len(),
             sensor: SensorMount::default(),
             noise: NoiseRecords::default(),
+            sighting_lines: Vec::new(),
+            refused_times,
         })
     }
 
@@ -103,12 +212,36 @@ impl Log {
     /// a late measurement. Measurements of ids not in the map are counted
     /// in [`Log::unknown_sightings`] and left out. A log without a `sensor`
     /// line has its sensor at the robot's centre ([`SensorMount::default`]).
+    /// A measurement whose time is implausible ([`TimeProblem`]) is
+    /// refused: listed in [`Log::refused_times`], left out, and not taken
+    /// into the arrival of the ones after it.
     #[must_use]
     pub fn from_locus(name: &str, log: LocusLog) -> Self {
+        Self::from_locus_lines(name, log, &[])
+    }
+
+    /// As [`Log::from_locus`], with the line of each measurement in the
+    /// file (`lines[i]` of `log.measurements[i]`; empty if not known).
+    #[must_use]
+    pub fn from_locus_lines(name: &str, log: LocusLog, lines: &[usize]) -> Self {
         let mut arrival = f64::NEG_INFINITY;
         let mut unknown = 0;
         let mut sightings = Vec::with_capacity(log.measurements.len());
-        for m in &log.measurements {
+        let mut sighting_lines = Vec::with_capacity(lines.len());
+        let mut refused_times = Vec::new();
+        let times: Vec<f64> = log.measurements.iter().map(|m| m.time).collect();
+        let problems = time_problems(&times, log.odometry.last().map(|o| o.time));
+        for (i, (m, problem)) in log.measurements.iter().zip(problems).enumerate() {
+            let line = lines.get(i).copied();
+            if let Some(problem) = problem {
+                refused_times.push(RefusedTime {
+                    line,
+                    time: m.time,
+                    landmark: m.id,
+                    problem,
+                });
+                continue;
+            }
             arrival = arrival.max(m.time);
             if log.landmarks.iter().any(|l| l.id == m.id) {
                 sightings.push(Sighting {
@@ -118,6 +251,7 @@ impl Log {
                     range: m.range,
                     bearing: m.bearing,
                 });
+                sighting_lines.extend(line);
             } else {
                 unknown += 1;
             }
@@ -141,6 +275,8 @@ impl Log {
             unknown_sightings: unknown,
             sensor: log.sensor.unwrap_or_default(),
             noise: log.noise,
+            sighting_lines,
+            refused_times,
         }
     }
 
@@ -148,12 +284,14 @@ impl Log {
     /// `FILE` does not exist).
     ///
     /// # Errors
-    /// Missing file (named), malformed line (file and line).
+    /// Missing file (named), a path that is not a regular file (what it
+    /// is), malformed line (file and line).
     pub fn locus_csv(path: &Path) -> locus_logs::Result<Self> {
+        let (log, lines, _) = locus_csv::read_with_lines(path)?;
         let name = path
             .file_name()
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-        Ok(Self::from_locus(&name, locus_csv::read(path)?))
+        Ok(Self::from_locus_lines(&name, log, &lines))
     }
 
     /// The log as a Locus CSV log (measurements in arrival order), e.g. to
@@ -212,6 +350,56 @@ mod tests {
 
     fn parse(text: &str) -> LocusLog {
         locus_csv::parse(text, Path::new("t.csv")).unwrap()
+    }
+
+    #[test]
+    fn implausible_times_are_the_future_and_lone_spikes_not_late_lines() {
+        let kinds = |times: &[f64]| -> Vec<Option<&'static str>> {
+            time_problems(times, Some(10.0))
+                .iter()
+                .map(|p| {
+                    p.map(|p| match p {
+                        TimeProblem::AfterOdometry { .. } => "after",
+                        TimeProblem::AheadOfNeighbours { .. } => "spike",
+                    })
+                })
+                .collect()
+        };
+        // In order, late lines (going back, even by more than the window),
+        // a jump ahead that the next lines follow, up to 1 s past the end.
+        assert_eq!(kinds(&[1.0, 2.0, 1.5, 3.0, 0.5, 6.0, 6.5, 11.0]), [None; 8]);
+        // Beyond the odometry by more than 1 s: refused wherever listed,
+        // and not taken as the arrival of the lines after it.
+        assert_eq!(
+            kinds(&[1.0, 1e6, 1e6, 2.0, 11.5]),
+            [None, Some("after"), Some("after"), None, Some("after")]
+        );
+        // Ahead of both neighbours by more than 1 s: a lone spike.
+        assert_eq!(
+            kinds(&[1.0, 8.0, 2.0, 3.0]),
+            [None, Some("spike"), None, None]
+        );
+        assert_eq!(kinds(&[8.0, 2.0, 3.0]), [Some("spike"), None, None]);
+        // Without odometry only the spike rule applies.
+        assert_eq!(time_problems(&[1.0, 1e6], None), [None, None]);
+    }
+
+    #[test]
+    fn refused_lines_are_left_out_with_their_line_and_the_arrivals_stay_true() {
+        let text = "landmark,6,1,2\nodometry,0,0,0\nodometry,10,0,0\n\
+                    measurement,1,6,2,0.1\nmeasurement,1000000,6,2,0.1\nmeasurement,2,6,2,0.1\n";
+        let (csv, lines) = locus_csv::parse_with_lines(text, Path::new("t.csv")).unwrap();
+        assert_eq!(lines, [4, 5, 6]);
+        let log = Log::from_locus_lines("t", csv, &lines);
+        assert_eq!(log.sighting_lines, [4, 6]);
+        assert_eq!(log.sightings.len(), 2);
+        assert_eq!(log.sightings[1].arrival, 2.0, "not 1e6");
+        assert_eq!(log.refused_times.len(), 1);
+        assert_eq!(log.refused_times[0].line, Some(5));
+        assert_eq!(
+            log.refused_times[0].problem,
+            TimeProblem::AfterOdometry { last: 10.0 }
+        );
     }
 
     #[test]

@@ -7,9 +7,11 @@ use locus_eval::Summary;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Report {
     /// Errors against the ground truth (over the steps it covers), as for
-    /// `locus run`: `readings` counts the compared sightings,
-    /// `associated` those that reached the filter, `corrections` those
-    /// applied.
+    /// `locus run`; NaN (printed "n/a", `null` in JSON) for every figure
+    /// that needs the truth when no step was compared. `readings` counts
+    /// all the sightings replayed, `associated` those the gate judged
+    /// (applied or gated), `corrections` those applied, whether or not the
+    /// truth covers them; `acceptance` is NaN when none was judged.
     pub summary: Summary,
     /// The smoother's figures against the ground truth (with
     /// [`Config::smooth`](crate::Config::smooth)).
@@ -37,6 +39,12 @@ pub struct Report {
     pub not_in_map: usize,
     /// Sightings where the model predicts no measurement.
     pub no_measurement: usize,
+    /// Sightings refused because the filter cannot use them (see
+    /// [`Unusable`](crate::Unusable)); each is a step with that outcome.
+    pub unusable: usize,
+    /// Sightings refused before the replay for an implausible time stamp
+    /// ([`Log::refused_times`](crate::Log::refused_times)).
+    pub implausible_time: usize,
     /// Robot-to-robot sightings left out by the log.
     pub robot_sightings: usize,
     /// Sightings of unknown targets left out by the log.

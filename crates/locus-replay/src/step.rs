@@ -30,6 +30,49 @@ pub enum SightingOutcome {
     NotInMap,
     /// The model predicts no measurement (the robot on the landmark).
     NoMeasurement,
+    /// Refused: the filter cannot use it (the belief is unchanged).
+    Unusable(Unusable),
+}
+
+/// Why the filter cannot use a sighting.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Unusable {
+    /// Its range is above [`Config::max_range`](crate::Config::max_range).
+    RangeAbove {
+        /// The bound, m.
+        max: f64,
+    },
+    /// The correction failed on it: its innovation covariance is not
+    /// positive definite, or a value of the correction is not finite
+    /// (the filter's own typed error).
+    Filter(locus_core::Error),
+}
+
+impl Unusable {
+    /// The filter's errors that condemn the sighting rather than the
+    /// belief: a non-finite measurement, noise or model output, an
+    /// innovation or noise covariance that is not positive definite.
+    #[must_use]
+    pub fn of(e: locus_core::Error) -> Option<Self> {
+        use locus_core::{Error, Input};
+        match e {
+            Error::InnovationNotPositiveDefinite
+            | Error::NoiseNotPositiveDefinite
+            | Error::NonFinite(
+                Input::Measurement | Input::MeasurementNoise | Input::MeasurementModel,
+            ) => Some(Unusable::Filter(e)),
+            _ => None,
+        }
+    }
+}
+
+impl core::fmt::Display for Unusable {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Unusable::RangeAbove { max } => write!(f, "range above {max} m"),
+            Unusable::Filter(e) => write!(f, "{e}"),
+        }
+    }
 }
 
 /// The kind of an event.
@@ -48,6 +91,8 @@ pub enum EventKind {
         sighting: Sighting,
         /// What the filter did with it.
         outcome: SightingOutcome,
+        /// Its line in the log file, if known.
+        line: Option<usize>,
     },
 }
 
@@ -111,7 +156,9 @@ impl Step {
         push_f64(out, self.elapsed);
         match self.kind {
             EventKind::Odometry { .. } => out.push_str(",odometry,,,,,"),
-            EventKind::Sighting { sighting, outcome } => {
+            EventKind::Sighting {
+                sighting, outcome, ..
+            } => {
                 let _ = write!(out, ",sighting,{},", sighting.landmark);
                 push_f64(out, sighting.range);
                 out.push(',');
@@ -124,6 +171,7 @@ impl Step {
                     SightingOutcome::Gated { nis } => (Some(nis), "0"),
                     SightingOutcome::NotInMap => (None, "not-in-map"),
                     SightingOutcome::NoMeasurement => (None, "no-measurement"),
+                    SightingOutcome::Unusable(_) => (None, "unusable"),
                 };
                 if let Some(nis) = nis {
                     push_f64(out, nis);
@@ -220,7 +268,9 @@ impl Step {
             EventKind::Sighting { outcome, .. } => match outcome {
                 SightingOutcome::Applied { nis, .. } => (true, Some((nis, 2, true))),
                 SightingOutcome::Gated { nis } => (true, Some((nis, 2, false))),
-                SightingOutcome::NotInMap | SightingOutcome::NoMeasurement => (true, None),
+                SightingOutcome::NotInMap
+                | SightingOutcome::NoMeasurement
+                | SightingOutcome::Unusable(_) => (true, None),
             },
         };
         Some(Sample::planar(

@@ -5,7 +5,7 @@
 use locus_core::Belief;
 use locus_core::nalgebra::{Matrix3, Vector3};
 use locus_logs::mrclam::TruthPose;
-use locus_replay::{EventKind, Sighting, SightingOutcome, Step};
+use locus_replay::{EventKind, Sighting, SightingOutcome, Step, Unusable};
 use proptest::prelude::*;
 
 /// The row as the `format!`/`to_string` writer built it.
@@ -19,7 +19,9 @@ fn reference_row(step: &Step) -> String {
             String::new(),
             String::new(),
         ),
-        EventKind::Sighting { sighting, outcome } => {
+        EventKind::Sighting {
+            sighting, outcome, ..
+        } => {
             let (nis, applied) = match outcome {
                 SightingOutcome::Applied { nis, recovered, .. } => {
                     (nis.to_string(), if recovered { "recovered" } else { "1" })
@@ -27,6 +29,7 @@ fn reference_row(step: &Step) -> String {
                 SightingOutcome::Gated { nis } => (nis.to_string(), "0"),
                 SightingOutcome::NotInMap => (String::new(), "not-in-map"),
                 SightingOutcome::NoMeasurement => (String::new(), "no-measurement"),
+                SightingOutcome::Unusable(_) => (String::new(), "unusable"),
             };
             (
                 "sighting",
@@ -88,6 +91,9 @@ fn kind() -> impl Strategy<Value = EventKind> {
         number().prop_map(|nis| SightingOutcome::Gated { nis }),
         Just(SightingOutcome::NotInMap),
         Just(SightingOutcome::NoMeasurement),
+        Just(SightingOutcome::Unusable(Unusable::RangeAbove {
+            max: 1000.0
+        })),
     ];
     let sighting = (number(), any::<u32>(), number(), number()).prop_map(
         |(time, landmark, range, bearing)| Sighting {
@@ -100,8 +106,11 @@ fn kind() -> impl Strategy<Value = EventKind> {
     );
     prop_oneof![
         (number(), number()).prop_map(|(v, omega)| EventKind::Odometry { v, omega }),
-        (sighting, outcome)
-            .prop_map(|(sighting, outcome)| EventKind::Sighting { sighting, outcome }),
+        (sighting, outcome).prop_map(|(sighting, outcome)| EventKind::Sighting {
+            sighting,
+            outcome,
+            line: None,
+        }),
     ]
 }
 
@@ -160,6 +169,7 @@ fn rows_have_the_header_s_columns() {
                 bearing: -0.5,
             },
             outcome: SightingOutcome::NotInMap,
+            line: Some(12),
         },
     ];
     for (kind, truth) in kinds.into_iter().zip([

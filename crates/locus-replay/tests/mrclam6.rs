@@ -146,9 +146,14 @@ fn without_arrival(kind: EventKind) -> EventKind {
         EventKind::Sighting {
             mut sighting,
             outcome,
+            ..
         } => {
             sighting.arrival = 0.0;
-            EventKind::Sighting { sighting, outcome }
+            EventKind::Sighting {
+                sighting,
+                outcome,
+                line: None,
+            }
         }
         other => other,
     }

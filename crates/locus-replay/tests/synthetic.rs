@@ -137,3 +137,73 @@ fn the_innovation_likelihood_prefers_the_right_noise() {
     println!("innovation NLL: sigma 0.01 {right:.1}, 0.25 {large:.1}, 0.001 {small:.1}");
     assert!(right < large && right < small);
 }
+
+/// Issue 20: a sighting with range 1e154 (finite, so a valid field)
+/// aborted the replay ("S is not positive definite") or, ungated and
+/// Gaussian, threw the estimate 1e154 m away. It is refused as unusable;
+/// the estimate is that of the log without it, whatever the gate and the
+/// weighting.
+#[test]
+fn a_sighting_the_filter_cannot_use_is_refused_and_the_belief_kept() {
+    let clean = Log::from_locus(
+        "s",
+        locus_csv::parse(&text(false), Path::new("s.csv")).unwrap(),
+    );
+    let mut hostile = clean.clone();
+    let mut bad = hostile.sightings[12];
+    bad.time -= 0.01;
+    bad.range = 1e154;
+    hostile.sightings.insert(13, bad);
+    for (gate, robust_dof) in [(Some(0.99), Some(4.0)), (None, Some(4.0)), (None, None)] {
+        let cfg = Config {
+            gate,
+            robust_dof,
+            ..Config::default()
+        };
+        let a = replay(&clean, &cfg, |_| {}).unwrap();
+        let mut refused = Vec::new();
+        let b = replay(&hostile, &cfg, |s| {
+            if let locus_replay::EventKind::Sighting {
+                outcome: locus_replay::SightingOutcome::Unusable(why),
+                ..
+            } = s.kind
+            {
+                refused.push(why);
+            }
+        })
+        .unwrap();
+        assert_eq!(b.unusable, 1, "{gate:?} {robust_dof:?}");
+        assert_eq!(b.applied, a.applied, "{gate:?} {robust_dof:?}");
+        assert_eq!(
+            refused,
+            [locus_replay::Unusable::RangeAbove { max: 1000.0 }]
+        );
+        let d = (a.final_belief.x - b.final_belief.x).abs().max();
+        // The refused event splits one prediction in two: rounding only.
+        assert!(d < 1e-6, "{gate:?} {robust_dof:?}: final pose off by {d}");
+    }
+    // Within the range bound, the correction's own failure refuses it:
+    // with the bound lifted, the Student-t reweighting of an innovation of
+    // 1e154 m fails (its noise overflows), typed, not as an abort.
+    let cfg = Config {
+        gate: None,
+        max_range: f64::MAX,
+        ..Config::default()
+    };
+    let mut refused = Vec::new();
+    let b = replay(&hostile, &cfg, |s| {
+        if let locus_replay::EventKind::Sighting {
+            outcome: locus_replay::SightingOutcome::Unusable(why),
+            ..
+        } = s.kind
+        {
+            refused.push(why);
+        }
+    })
+    .unwrap();
+    assert_eq!(b.unusable, 1);
+    assert!(
+        matches!(refused[..], [locus_replay::Unusable::Filter(_)]),
+        "{refused:?}"
+    );
+}

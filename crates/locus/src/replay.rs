@@ -290,7 +290,36 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
     let mut samples: Vec<Sample> = Vec::new();
     let mut io_error: Option<std::io::Error> = None;
     let mut row = String::with_capacity(512);
+    let mut refused: Vec<String> = log
+        .refused_times
+        .iter()
+        .map(|r| {
+            format!(
+                "{}: sighting of landmark {} at {} s refused: implausible time stamp, {}",
+                place(&log.name, r.line),
+                r.landmark,
+                number(r.time),
+                r.problem
+            )
+        })
+        .collect();
     let report = replay(log, cfg, |step| {
+        if let locus_replay::EventKind::Sighting {
+            sighting,
+            outcome: locus_replay::SightingOutcome::Unusable(why),
+            line,
+        } = step.kind
+        {
+            refused.push(format!(
+                "{}: sighting of landmark {} at {} s (range {} m, bearing {} rad) refused: \
+                 the filter cannot use it: {why}",
+                place(&log.name, line),
+                sighting.landmark,
+                number(sighting.time),
+                number(sighting.range),
+                number(sighting.bearing)
+            ));
+        }
         if step.index % 4096 == 0 {
             bar.set_position(step.index as u64);
         }
@@ -378,11 +407,51 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
     text.push_str(estimated);
     text.push_str(&format!("{}\n", calibration_table(&report)));
     text.push_str(&format!("{}\n", counts_table(cfg, &report)));
+    text.push_str(&refused_list(&refused));
     text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
     if cfg.smooth {
         text.push_str(&format!("smoothed: {}\n", smoothed_path.display()));
     }
     print_out(&text)
+}
+
+/// Where a sighting is in its log: `name:line`, or `name` alone when the
+/// line is not known (an MRCLAM log).
+fn place(name: &str, line: Option<usize>) -> String {
+    line.map_or_else(|| name.to_string(), |l| format!("{name}:{l}"))
+}
+
+/// A logged value for a message: as written if of ordinary size, else in
+/// scientific notation (a range of 1e154 m is not spelt out in 155 digits).
+fn number(v: f64) -> String {
+    if v == 0.0 || (1e-4..1e12).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// Sightings refused listed at most.
+const REFUSED_SHOWN: usize = 20;
+
+/// The refused sightings, one line each (the first [`REFUSED_SHOWN`]).
+fn refused_list(refused: &[String]) -> String {
+    if refused.is_empty() {
+        return String::new();
+    }
+    let mut text = format!("refused sightings ({}):\n", refused.len());
+    for r in refused.iter().take(REFUSED_SHOWN) {
+        text.push_str("  ");
+        text.push_str(r);
+        text.push('\n');
+    }
+    if refused.len() > REFUSED_SHOWN {
+        text.push_str(&format!(
+            "  ... and {} more\n",
+            refused.len() - REFUSED_SHOWN
+        ));
+    }
+    text
 }
 
 /// A share as a percentage, or "n/a" when it could not be computed.
@@ -506,6 +575,10 @@ fn counts_table(cfg: &Config, r: &Report) -> Table {
             "late sightings re-run / too late [count]",
             format!("{} / {}", r.late, r.too_late),
         ),
+        (
+            "refused: unusable / implausible time [count, listed below]",
+            format!("{} / {}", r.unusable, r.implausible_time),
+        ),
     ];
     for (k, v) in rows {
         t.add_row(vec![k.to_string(), v]);
@@ -544,6 +617,10 @@ struct ReplayMetrics {
     not_in_map: usize,
     late: usize,
     too_late: usize,
+    /// Sightings the filter could not use (refused, listed with their line).
+    unusable: usize,
+    /// Sightings refused for an implausible time stamp.
+    implausible_time: usize,
 }
 
 impl ReplayMetrics {
@@ -570,6 +647,8 @@ impl ReplayMetrics {
             not_in_map: r.not_in_map,
             late: r.late,
             too_late: r.too_late,
+            unusable: r.unusable,
+            implausible_time: r.implausible_time,
         }
     }
 }

@@ -124,6 +124,7 @@ impl CostFunction for Problem<'_> {
 /// # Errors
 /// Unreadable logs, a failed replay or optimisation, standard output closed.
 pub fn run(args: &Args) -> Result<()> {
+    check_robot_sets(&args.tune_on, &args.held_out)?;
     let dataset = Dataset::open(&args.dir)?;
     let read = |robots: &[u32]| -> Result<Vec<Log>> {
         robots
@@ -133,9 +134,6 @@ pub fn run(args: &Args) -> Result<()> {
     };
     let tune_logs = read(&args.tune_on)?;
     let held_logs = read(&args.held_out)?;
-    if tune_logs.is_empty() {
-        return Err(anyhow!("no robot to tune on"));
-    }
     let start = Config::default();
     let (tuned, how) = match args.objective {
         Objective::Em => estimate_on(&tune_logs, &start)?,
@@ -239,6 +237,31 @@ pub fn run(args: &Args) -> Result<()> {
 }
 
 /// The smallest of the 3-sigma shares (NaN if any is).
+/// The robot sets must be disjoint and without repeats: a held-out robot
+/// that is also tuned on is not held out, and a robot listed twice would
+/// count twice. Checked before any work.
+fn check_robot_sets(tune_on: &[u32], held_out: &[u32]) -> Result<()> {
+    if tune_on.is_empty() {
+        return Err(anyhow!("no robot to tune on (--tune-on is empty)"));
+    }
+    for (flag, set) in [("--tune-on", tune_on), ("--held-out", held_out)] {
+        let repeated = set
+            .iter()
+            .enumerate()
+            .find_map(|(i, r)| set[..i].contains(r).then_some(r));
+        if let Some(r) = repeated {
+            return Err(anyhow!("robot {r} is listed twice in {flag}"));
+        }
+    }
+    if let Some(r) = tune_on.iter().find(|r| held_out.contains(r)) {
+        return Err(anyhow!(
+            "robot {r} is in both --tune-on and --held-out: a robot tuned on \
+             cannot be held out"
+        ));
+    }
+    Ok(())
+}
+
 fn worst(shares: &[f64; 3]) -> f64 {
     shares.iter().copied().fold(f64::INFINITY, f64::min)
 }
