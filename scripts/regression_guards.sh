@@ -14,7 +14,7 @@ DATA=${LOCUS_MRCLAM:-../shared/data/mrclam/MRCLAM_Dataset6}
 OUT=$(mktemp -d)
 trap 'rm -rf "$OUT"' EXIT
 cargo build --release --locked -p locus >/dev/null
-BIN=./target/release/locus
+BIN=${CARGO_TARGET_DIR:-./target}/release/locus
 for s in square square-ideal wall45 tricycle-slip hover; do
   "$BIN" run "$s" --seed 1 --no-plots --out "$OUT/run-$s" >/dev/null
   echo "$(sha256sum < "$OUT/run-$s/log.csv" | cut -d' ' -f1)  run-$s"

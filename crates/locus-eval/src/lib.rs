@@ -295,7 +295,13 @@ impl Tally {
     #[must_use]
     #[allow(clippy::cast_precision_loss)]
     pub fn summary(&self, laps_completed: usize) -> Summary {
-        let n = self.steps.max(1) as f64;
+        // No step compared with the truth: every figure that needs it is
+        // NaN ("n/a", null in JSON), never 0.
+        let n = if self.steps > 0 {
+            self.steps as f64
+        } else {
+            f64::NAN
+        };
         let (odo_pos, odo_heading, odo_max) = if self.odo_n > 0 {
             let m = self.odo_n as f64;
             (
@@ -313,7 +319,11 @@ impl Tally {
             laps_completed,
             ekf_position_rmse: (self.sq_pos / n).sqrt(),
             ekf_heading_rmse: (self.sq_heading / n).sqrt(),
-            ekf_max_position_error: self.max_pos,
+            ekf_max_position_error: if self.steps > 0 {
+                self.max_pos
+            } else {
+                f64::NAN
+            },
             odometry_position_rmse: odo_pos,
             odometry_heading_rmse: odo_heading,
             odometry_max_position_error: odo_max,
@@ -327,7 +337,7 @@ impl Tally {
             acceptance: if self.associated > 0 {
                 self.corrections as f64 / self.associated as f64
             } else {
-                0.0
+                f64::NAN
             },
             wall_clock,
             real_time_factor: if wall_clock > 0.0 {
@@ -335,6 +345,30 @@ impl Tally {
             } else {
                 f64::INFINITY
             },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Tally;
+
+    /// A run compared with no truth (a log without ground truth) has no
+    /// error figures: they read "n/a" (NaN, `null` in JSON), never 0.
+    #[test]
+    fn an_empty_tally_reports_no_figure_as_zero() {
+        let s = Tally::new(3).unwrap().summary(0);
+        for (name, v) in [
+            ("ekf_position_rmse", s.ekf_position_rmse),
+            ("ekf_heading_rmse", s.ekf_heading_rmse),
+            ("ekf_max_position_error", s.ekf_max_position_error),
+            ("odometry_position_rmse", s.odometry_position_rmse),
+            ("mean_nees", s.mean_nees),
+            ("nees_in_interval", s.nees_in_interval),
+            ("within_3_sigma x", s.within_3_sigma[0]),
+            ("acceptance", s.acceptance),
+        ] {
+            assert!(v.is_nan(), "{name} = {v}");
         }
     }
 }
