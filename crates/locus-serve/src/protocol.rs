@@ -14,21 +14,26 @@ use crate::params::{Invalid, Limit};
 use crate::presets::{LiveFigure, Preset};
 
 /// A message from the page.
+///
+/// The messages without fields are empty struct variants (`Start {}`), not
+/// unit variants: serde's `deny_unknown_fields` ignores the extra keys of
+/// an internally tagged unit variant, and docs/ui.md promises that unknown
+/// fields are refused on every message.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ClientMsg {
     /// Run (at the speed factor).
-    Start,
+    Start {},
     /// Pause.
-    Stop,
+    Stop {},
     /// Restart the run from the initial pose and covariance (new values of
     /// `initial` apply here), same seed.
-    Reset,
+    Reset {},
     /// One step of `dt` (pauses first).
-    Step,
+    Step {},
     /// Steps until the next correction (at most 10 s of simulated time),
     /// paused, for the step-through view.
-    StepCorrection,
+    StepCorrection {},
     /// The speed factor (simulated over wall-clock time), `speed` limit.
     Speed {
         /// The factor: a number or its text.
@@ -43,7 +48,7 @@ pub enum ClientMsg {
         w: Value,
     },
     /// Back to the path controller.
-    TeleopOff,
+    TeleopOff {},
     /// Live parameters; each field is optional, all or nothing is applied.
     Params {
         /// The fields: `q11`, `q22`, `r11`, `r22`, `ir_sigma`, `use_ir`,
@@ -70,7 +75,7 @@ pub enum ClientMsg {
         step: String,
     },
     /// Ask for the run's log as CSV (the format of `locus run`'s `log.csv`).
-    Export,
+    Export {},
 }
 
 /// One step as the page plots it (SI units).

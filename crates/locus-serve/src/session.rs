@@ -203,7 +203,7 @@ impl Session {
 
     fn apply(&mut self, msg: ClientMsg, now: Instant) -> Result<Vec<ServerMsg>, Invalid> {
         Ok(match msg {
-            ClientMsg::Start => {
+            ClientMsg::Start {} => {
                 if self.sim.is_finished() {
                     return Err(Invalid::new("start", "the run has ended: reset first"));
                 }
@@ -211,21 +211,21 @@ impl Session {
                 self.owed = 0.0;
                 vec![self.frame()]
             }
-            ClientMsg::Stop => {
+            ClientMsg::Stop {} => {
                 self.running = false;
                 vec![self.frame()]
             }
-            ClientMsg::Reset => {
+            ClientMsg::Reset {} => {
                 self.reset()
                     .map_err(|e| Invalid::new("reset", e.to_string()))?;
                 vec![self.params(), self.frame()]
             }
-            ClientMsg::Step => {
+            ClientMsg::Step {} => {
                 self.running = false;
                 self.advance(1, now);
                 vec![self.frame()]
             }
-            ClientMsg::StepCorrection => {
+            ClientMsg::StepCorrection {} => {
                 self.running = false;
                 self.correction = None;
                 let max = (STEP_CORRECTION_MAX_TIME / self.cfg.dt).ceil();
@@ -248,7 +248,7 @@ impl Session {
                 self.teleop = Some((Teleop { v, w }, now));
                 Vec::new()
             }
-            ClientMsg::TeleopOff => {
+            ClientMsg::TeleopOff {} => {
                 self.teleop = None;
                 Vec::new()
             }
@@ -312,7 +312,7 @@ impl Session {
                     .map_err(|e| Invalid::new("preset", e.to_string()))?;
                 vec![self.params(), self.frame()]
             }
-            ClientMsg::Export => vec![self.export()],
+            ClientMsg::Export {} => vec![self.export()],
         })
     }
 

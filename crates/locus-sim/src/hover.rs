@@ -50,6 +50,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::closed_loop::Error;
 use crate::noise::gauss;
+use crate::scenario_file::{MAX_STEPS, within};
 use locus_eval::{Record, Sample, Summary, Tally};
 
 /// The estimator of the `hover` scenario.
@@ -125,42 +126,55 @@ impl HoverConfig {
     /// [`Error::Invalid`] naming the first bad field.
     pub fn validate(&self) -> Result<(), Error> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
-        let checks: [(bool, &'static str, &'static str); 7] = [
-            (pos(self.dt), "dt", "must be finite and > 0"),
+        // Plausible ranges (SI); a run is at most 1e7 steps.
+        let checks: [(bool, &'static str, &'static str); 8] = [
             (
-                pos(self.duration) && self.duration >= self.dt,
+                within(self.dt, 1e-5, 1.0),
+                "dt",
+                "must be in [1e-5, 1] s (a run is at most 1e7 steps)",
+            ),
+            (
+                within(self.duration, self.dt, 1e5),
                 "duration",
-                "must be finite and >= dt",
+                "must be in [dt, 1e5] s",
             ),
             (
-                self.q.iter().all(|v| v.is_finite() && *v >= 0.0),
+                self.duration / self.dt <= MAX_STEPS,
+                "duration",
+                "over dt makes more than 1e7 steps, the most a run may have (duration / dt)",
+            ),
+            (
+                self.q.iter().all(|v| within(*v, 0.0, 1e3)),
                 "q",
-                "must be finite and >= 0",
+                "must be in [0, 1000] (m^2/s, rad^2/s)",
             ),
             (
-                pos(self.pixel_sigma),
+                pos(self.pixel_sigma) && self.pixel_sigma <= 1e3,
                 "pixel_sigma",
-                "must be finite and > 0",
+                "must be in (0, 1000] px",
             ),
             (
-                self.marks.iter().flatten().all(|v| v.is_finite()),
+                self.marks
+                    .iter()
+                    .flatten()
+                    .all(|v| within(*v, -100.0, 100.0)),
                 "marks",
-                "must be finite",
+                "must be in [-100, 100] m",
             ),
             (
-                self.initial_std.iter().all(|v| pos(*v)),
+                self.initial_std.iter().all(|v| pos(*v) && *v <= 100.0),
                 "initial_std",
-                "must be finite and > 0",
+                "must be in (0, 100] (m, rad)",
             ),
             (
                 match self.estimator {
                     HoverEstimator::Ekf => true,
                     HoverEstimator::Observer { alpha, vg } => {
-                        alpha.is_finite() && alpha >= 0.0 && vg.is_finite() && vg > 0.0
+                        within(alpha, 0.0, 1e4) && vg.is_finite() && vg > 0.0 && vg <= 1e4
                     }
                 },
                 "estimator",
-                "alpha must be finite and >= 0, vg finite and > 0",
+                "alpha must be in [0, 10000] 1/s, vg in (0, 10000]",
             ),
         ];
         match checks.iter().find(|(ok, _, _)| !ok) {

@@ -6,6 +6,9 @@
 //! (for `square`: the fields of [`SquareConfig`], nested `[control]` for the
 //! controller). Unknown keys, wrong types and out-of-range values are
 //! [`FileError::Invalid`] errors naming the file, line, column and field.
+//! Every numeric field has a plausible range, stated in its error (each
+//! kind's `validate`), and a run is at most [`MAX_STEPS`] steps; a file is
+//! read up to [`MAX_FILE_BYTES`] ([`FileError::TooLarge`] otherwise).
 //!
 //! ```toml
 //! scenario = "square"
@@ -32,6 +35,20 @@ use crate::closed_loop::{self, SquareConfig};
 use crate::hover::HoverConfig;
 use crate::tricycle_slip::TricycleSlipConfig;
 use crate::wall45::Wall45Config;
+
+/// Most steps of a run (`max_time / dt`, `duration / dt`, ...): a
+/// configuration that would run longer is refused up front (the built-in
+/// scenarios run 60 000 steps at most; 1e7 steps is a log of about 2 GB).
+pub const MAX_STEPS: f64 = 1e7;
+
+/// Largest scenario file read (bytes): a complete one is under 2 kB.
+pub const MAX_FILE_BYTES: u64 = 1 << 20;
+
+/// Whether `v` is finite and in `[lo, hi]` (the plausible ranges of the
+/// configurations' fields).
+pub(crate) fn within(v: f64, lo: f64, hi: f64) -> bool {
+    v.is_finite() && (lo..=hi).contains(&v)
+}
 
 /// The built-in scenarios, by name.
 pub const BUILTIN: [&str; 5] = ["square", "square-ideal", "wall45", "tricycle-slip", "hover"];
@@ -145,15 +162,26 @@ pub enum FileError {
         /// Why.
         source: std::io::Error,
     },
+    /// The file is longer than [`MAX_FILE_BYTES`] (refused before it is
+    /// parsed).
+    #[error("{path}: scenario file larger than {max} bytes, the most read", path = .path.display())]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// The limit (bytes).
+        max: u64,
+    },
     /// Bad TOML, a missing or unknown `scenario`, an unknown key, a wrong
     /// type or an out-of-range value.
-    #[error("{path}, line {line}, column {column}{field}: {message}",
+    #[error("{path}{at}{field}: {message}",
         path = .path.display(),
+        at = if *.line == 0 { String::new() } else { format!(", line {line}, column {column}") },
         field = .field.as_ref().map_or_else(String::new, |f| format!(", field `{f}`")))]
     Invalid {
         /// The file.
         path: PathBuf,
-        /// Line of the offending text (1-based; 0 if unknown).
+        /// Line of the offending text (1-based; 0 if the field is not in
+        /// the file: its default value, or one derived from other fields).
         line: usize,
         /// Column of the offending text (1-based, in characters; 0 if
         /// unknown).
@@ -168,16 +196,28 @@ pub enum FileError {
     Serialize(String),
 }
 
-/// Reads and parses the scenario file at `path`.
+/// Reads and parses the scenario file at `path` (at most
+/// [`MAX_FILE_BYTES`], checked before it is read whole).
 ///
 /// # Errors
-/// [`FileError::Io`] if it cannot be read; [`FileError::Invalid`] as in
-/// [`parse`].
+/// [`FileError::Io`] if it cannot be read; [`FileError::TooLarge`];
+/// [`FileError::Invalid`] as in [`parse`].
 pub fn load(path: &Path) -> Result<ScenarioConfig, FileError> {
-    let text = std::fs::read_to_string(path).map_err(|source| FileError::Io {
+    use std::io::Read;
+    let io = |source| FileError::Io {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    let mut text = String::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_FILE_BYTES + 1).read_to_string(&mut text))
+        .map_err(io)?;
+    if text.len() as u64 > MAX_FILE_BYTES {
+        return Err(FileError::TooLarge {
+            path: path.to_path_buf(),
+            max: MAX_FILE_BYTES,
+        });
+    }
     parse(&text, path)
 }
 
@@ -237,6 +277,33 @@ where
     })?;
     merge(&mut merged, user);
     toml::Value::Table(merged).try_into()
+}
+
+/// The dotted key of `text` (a TOML table) that alone fails to
+/// deserialize as `C`: where an error without a position (an array of the
+/// wrong length, found only once the value is converted) comes from.
+fn failing_key<C: DeserializeOwned>(text: &str) -> Option<String> {
+    let user: toml::Table = toml::from_str(text).ok()?;
+    let fails = |key: &str, value: toml::Value| {
+        let mut one = toml::Table::new();
+        one.insert(key.to_string(), value);
+        toml::Value::Table(one).try_into::<C>().is_err()
+    };
+    for (key, value) in &user {
+        if let toml::Value::Table(inner) = value {
+            for (sub, v) in inner {
+                let mut t = toml::Table::new();
+                t.insert(sub.clone(), v.clone());
+                if fails(key, toml::Value::Table(t)) {
+                    return Some(format!("{key}.{sub}"));
+                }
+            }
+        }
+        if fails(key, value.clone()) {
+            return Some(key.clone());
+        }
+    }
+    None
 }
 
 /// Deep merge: `over`'s keys replace `into`'s, tables merge recursively.
@@ -305,21 +372,30 @@ pub fn parse(text: &str, path: &Path) -> Result<ScenarioConfig, FileError> {
     let spaces = " ".repeat(span.len());
     blanked.replace_range(span, &spaces);
 
-    let de_error = |e: toml::de::Error| {
-        let field = e.span().and_then(|s| field_at(table, s.start));
-        invalid(e.span(), field, e.message().trim().to_string())
+    // An error without a position is placed at the key that causes it.
+    let de_error = |e: toml::de::Error, failing: fn(&str) -> Option<String>| {
+        let message = e.message().trim().to_string();
+        if let Some(span) = e.span() {
+            let field = field_at(table, span.start);
+            return invalid(Some(span), field, message);
+        }
+        let field = failing(&blanked);
+        let span = field.as_deref().and_then(|f| key_span(table, f));
+        invalid(span, field, message)
     };
     let config = match base {
-        ScenarioConfig::Square(b) => {
-            ScenarioConfig::Square(overlay(&b, &blanked).map_err(de_error)?)
-        }
-        ScenarioConfig::Wall45(b) => {
-            ScenarioConfig::Wall45(overlay(&b, &blanked).map_err(de_error)?)
-        }
-        ScenarioConfig::TricycleSlip(b) => {
-            ScenarioConfig::TricycleSlip(overlay(&b, &blanked).map_err(de_error)?)
-        }
-        ScenarioConfig::Hover(b) => ScenarioConfig::Hover(overlay(&b, &blanked).map_err(de_error)?),
+        ScenarioConfig::Square(b) => ScenarioConfig::Square(
+            overlay(&b, &blanked).map_err(|e| de_error(e, failing_key::<SquareConfig>))?,
+        ),
+        ScenarioConfig::Wall45(b) => ScenarioConfig::Wall45(
+            overlay(&b, &blanked).map_err(|e| de_error(e, failing_key::<Wall45Config>))?,
+        ),
+        ScenarioConfig::TricycleSlip(b) => ScenarioConfig::TricycleSlip(
+            overlay(&b, &blanked).map_err(|e| de_error(e, failing_key::<TricycleSlipConfig>))?,
+        ),
+        ScenarioConfig::Hover(b) => ScenarioConfig::Hover(
+            overlay(&b, &blanked).map_err(|e| de_error(e, failing_key::<HoverConfig>))?,
+        ),
     };
     if let Err(Invalid { field, message }) = config.validate() {
         let span = field.and_then(|f| key_span(table, f));

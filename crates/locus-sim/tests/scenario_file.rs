@@ -96,7 +96,7 @@ fn bad_files_name_the_line_column_and_field() {
         (3, 3, Some("control.v_ref")),
         "{msg}"
     );
-    assert!(msg.contains("> 0 m/s"), "{msg}");
+    assert!(msg.contains("must be in (0, 10] m/s"), "{msg}");
     let (line, _, field, msg) = bad("scenario = \"square\"\nq11 = 0.0\n");
     assert_eq!((line, field.as_deref()), (2, Some("q11")), "{msg}");
     // Unknown nested key.

@@ -34,11 +34,12 @@ pub struct DemoArgs {
     /// readings beyond the end of the wall find no wall).
     #[arg(long, default_value_t = 100)]
     steps: usize,
-    /// Standard deviation of each IR reading, m.
-    #[arg(long, default_value_t = 0.005)]
+    /// Standard deviation of each IR reading, m (> 0).
+    #[arg(long, default_value_t = 0.005, value_parser = crate::args::positive_f64)]
     ir_sigma: f64,
-    /// Right-wheel encoder scale error (0.02 = over-counts by 2 %).
-    #[arg(long, default_value_t = 0.02)]
+    /// Right-wheel encoder scale error (0.02 = over-counts by 2 %; finite,
+    /// > -1).
+    #[arg(long, default_value_t = 0.02, value_parser = crate::args::finite_f64)]
     scale_error: f64,
 }
 
@@ -54,6 +55,10 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     ensure!(
         args.ir_sigma > 0.0 && args.ir_sigma.is_finite(),
         "--ir-sigma must be > 0 (m)"
+    );
+    ensure!(
+        args.scale_error > -1.0,
+        "--scale-error must be > -1 (a wheel that travels)"
     );
     let mut rng = StdRng::seed_from_u64(args.seed);
     let ir_noise = Normal::new(0.0, args.ir_sigma).context("IR noise")?;

@@ -81,6 +81,9 @@ pub fn run(args: &Args) -> Result<()> {
         None => Shard::ALL,
     };
     let study = Study::new(config)?;
+    // The output directory before the work: a bad `--out` must not cost
+    // the whole computation.
+    crate::output::writable_dir(&args.out)?;
     let cells = study.cells().filter(|c| shard.contains(c.index)).count();
     let g = &study.config().grid;
     println!(
@@ -109,8 +112,6 @@ pub fn run(args: &Args) -> Result<()> {
         "computed {cells} cells in {wall:.1} s wall time on {} threads",
         pool.current_num_threads()
     );
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
     let name = if shard.count > 1 {
         format!("doa-shard-{}-of-{}.csv", shard.index, shard.count)
     } else {
@@ -133,15 +134,21 @@ fn load_config(path: Option<&Path>) -> Result<DoaConfig> {
 }
 
 fn run_merge(args: &MergeArgs) -> Result<()> {
+    // Everything checkable before the shards are read: the configuration
+    // and the output directory.
+    let config = args.config.as_deref().map(DoaConfig::load).transpose()?;
+    crate::output::writable_dir(&args.out)?;
     let mut parts = Vec::new();
     for p in &args.inputs {
-        let text =
-            std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
-        parts.push(DoaResult::from_csv(&text, &p.display().to_string())?);
+        let text = crate::output::read_bounded(p, MAX_SHARD_BYTES)?;
+        let name = p.display().to_string();
+        parts.push(match &config {
+            Some(c) => DoaResult::from_csv_of(&text, &name, c)?,
+            None => DoaResult::from_csv(&text, &name)?,
+        });
     }
     let merged = merge(parts)?;
-    if let Some(c) = &args.config {
-        let config = DoaConfig::load(c)?;
+    if let (Some(config), Some(c)) = (&config, &args.config) {
         if config.hash() != merged.config_hash {
             return Err(anyhow!(
                 "the shards were computed with another configuration than {}",
@@ -149,8 +156,6 @@ fn run_merge(args: &MergeArgs) -> Result<()> {
             ));
         }
     }
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
     let csv = args.out.join("doa.csv");
     std::fs::write(&csv, merged.to_csv()).with_context(|| format!("writing {}", csv.display()))?;
     println!(
@@ -161,6 +166,10 @@ fn run_merge(args: &MergeArgs) -> Result<()> {
     );
     report(&merged, &args.out, args.no_plots)
 }
+
+/// Largest shard file read (bytes): a line per cell, under 200 bytes each,
+/// for at most `MAX_GRID_CELLS` cells.
+const MAX_SHARD_BYTES: u64 = 200 * locus_analysis::doa::MAX_GRID_CELLS as u64;
 
 /// Axis values of a whole-grid result: (v_g by row, alpha by column).
 fn axes(result: &DoaResult) -> (Vec<f64>, Vec<f64>) {

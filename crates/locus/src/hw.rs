@@ -51,7 +51,7 @@ pub struct Args {
     #[arg(long, default_value_t = 4)]
     pub dividers: usize,
     /// Clock (MHz; the papers' timings are at 50 MHz).
-    #[arg(long, default_value_t = 50.0)]
+    #[arg(long, default_value_t = 50.0, value_parser = crate::args::positive_f64)]
     pub clock_mhz: f64,
 }
 

@@ -3,6 +3,7 @@
 //! The binary is thin: argument parsing, printing and files. The maths lives in
 //! `locus-core` (the filter) and `locus-models` (the papers' models).
 
+mod args;
 mod demo;
 mod doa;
 mod font;
@@ -92,6 +93,8 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // `locus hw | head -1`: a `println!` on the closed pipe ends quietly.
+    output::quiet_broken_pipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo(args) => demo::run(&args),

@@ -53,7 +53,7 @@ pub struct PictureArgs {
     /// (positive). The legend gives the probability a 2-D Gaussian falls
     /// inside, 1 - exp(-k^2/2): 39.3 % at 1 sigma (not 68.3 %), 68.3 % at
     /// 1.515, 98.9 % at 3.
-    #[arg(long, default_value_t = ELLIPSE_SIGMA)]
+    #[arg(long, default_value_t = ELLIPSE_SIGMA, value_parser = crate::args::positive_f64)]
     pub ellipse_sigma: f64,
 }
 

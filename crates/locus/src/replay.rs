@@ -258,7 +258,7 @@ fn crosses(log: &Log) -> Vec<Segment<f64>> {
 }
 
 fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str) -> Result<()> {
-    fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    crate::output::prepare_run_dir(out)?;
     let csv_path = out.join("log.csv");
     let file =
         File::create(&csv_path).with_context(|| format!("creating {}", csv_path.display()))?;

@@ -10,6 +10,39 @@ use serde::{Deserialize, Serialize};
 
 use super::DoaError;
 
+/// Largest configuration file read (bytes): a study's configuration is a
+/// few hundred bytes.
+pub const MAX_CONFIG_BYTES: u64 = 1 << 20;
+
+/// Most cells of a grid (the paper's is 12 x 25 = 300): a bigger grid is
+/// refused up front rather than computed for days.
+pub const MAX_GRID_CELLS: usize = 100_000;
+
+/// Most Euler steps of one run (`horizon / dt`; the spec's is 600).
+pub const MAX_RUN_STEPS: f64 = 1e6;
+
+/// Most amplitudes stepped through by the `M_zeta` search
+/// (`(m_cap - m_start) / m_step`; the spec's is 39).
+pub const MAX_SEARCH_STEPS: f64 = 1e4;
+
+/// The text of the file at `path`, refused with
+/// [`std::io::ErrorKind::FileTooLarge`] if longer than `max` bytes (it is
+/// not read whole first).
+pub(crate) fn read_bounded(path: &Path, max: u64) -> std::io::Result<String> {
+    use std::io::Read;
+    let mut text = String::new();
+    std::fs::File::open(path)?
+        .take(max + 1)
+        .read_to_string(&mut text)?;
+    if text.len() as u64 > max {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::FileTooLarge,
+            format!("larger than {max} bytes, the most read"),
+        ));
+    }
+    Ok(text)
+}
+
 /// The grid of the study: `v_g` (dimensionless, `P0 = v_g Q`) and `alpha`
 /// (1/s), each `start + i step`, `i = 0..count`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -200,10 +233,11 @@ pub struct DoaConfig {
 }
 
 impl DoaConfig {
-    /// Reads and validates a configuration file.
+    /// Reads and validates a configuration file (at most
+    /// [`MAX_CONFIG_BYTES`]).
     pub fn load(path: &Path) -> Result<Self, DoaError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| DoaError::Io {
+        let text = read_bounded(path, MAX_CONFIG_BYTES).map_err(|source| DoaError::Io {
             file: file.clone(),
             source,
         })?;
@@ -249,17 +283,41 @@ impl DoaConfig {
             }
         };
         let g = &self.grid;
-        if g.v_g_count == 0 {
-            return Err(fail("grid.v_g_count", "must be >= 1".into()));
+        for (field, count) in [
+            ("grid.v_g_count", g.v_g_count),
+            ("grid.alpha_count", g.alpha_count),
+        ] {
+            if count == 0 {
+                return Err(fail(field, "must be >= 1".into()));
+            }
+            if count > MAX_GRID_CELLS {
+                return Err(fail(
+                    field,
+                    format!("{count} is more than the {MAX_GRID_CELLS} cells a study may have"),
+                ));
+            }
         }
-        if g.alpha_count == 0 {
-            return Err(fail("grid.alpha_count", "must be >= 1".into()));
+        if g.v_g_count * g.alpha_count > MAX_GRID_CELLS {
+            return Err(fail(
+                "grid.alpha_count",
+                format!(
+                    "a {} x {} grid is {} cells; a study may have at most {MAX_GRID_CELLS} \
+                     (split it over several configurations)",
+                    g.v_g_count,
+                    g.alpha_count,
+                    g.v_g_count * g.alpha_count
+                ),
+            ));
         }
-        if !(g.v_g_step.is_finite() && g.v_g_start.is_finite()) {
-            return Err(fail("grid.v_g_step", "must be finite".into()));
-        }
-        if !(g.alpha_step.is_finite() && g.alpha_start.is_finite()) {
-            return Err(fail("grid.alpha_step", "must be finite".into()));
+        for (field, v) in [
+            ("grid.v_g_start", g.v_g_start),
+            ("grid.v_g_step", g.v_g_step),
+            ("grid.alpha_start", g.alpha_start),
+            ("grid.alpha_step", g.alpha_step),
+        ] {
+            if !v.is_finite() {
+                return Err(fail(field, format!("must be finite, got {v}")));
+            }
         }
         for i in [0, g.v_g_count - 1] {
             let v = g.v_g(i);
@@ -309,6 +367,15 @@ impl DoaConfig {
         finite_pos("run.horizon", r.horizon)?;
         finite_pos("run.threshold", r.threshold)?;
         let steps = r.horizon / r.dt;
+        if steps > MAX_RUN_STEPS {
+            return Err(fail(
+                "run.horizon",
+                format!(
+                    "horizon / dt is {steps:e} steps per run; at most {MAX_RUN_STEPS:e} \
+                     (shorten the horizon or lengthen dt)"
+                ),
+            ));
+        }
         if (steps - steps.round()).abs() > 1e-9 * steps.max(1.0) || steps.round() < 1.0 {
             return Err(fail(
                 "run.horizon",
@@ -324,6 +391,16 @@ impl DoaConfig {
             return Err(fail(
                 "search.m_cap",
                 format!("must be finite and >= m_start, got {}", s.m_cap),
+            ));
+        }
+        let stepping = (s.m_cap - s.m_start) / s.m_step;
+        if stepping > MAX_SEARCH_STEPS {
+            return Err(fail(
+                "search.m_step",
+                format!(
+                    "(m_cap - m_start) / m_step is {stepping:e} amplitudes to try; at most \
+                     {MAX_SEARCH_STEPS:e}"
+                ),
             ));
         }
         Ok(())

@@ -44,7 +44,10 @@ mod config;
 mod shards;
 mod study;
 
-pub use config::{DoaConfig, GeometryConfig, GridConfig, NoiseConfig, RunConfig, SearchConfig};
+pub use config::{
+    DoaConfig, GeometryConfig, GridConfig, MAX_CONFIG_BYTES, MAX_GRID_CELLS, MAX_RUN_STEPS,
+    MAX_SEARCH_STEPS, NoiseConfig, RunConfig, SearchConfig,
+};
 pub use shards::{DoaResult, Shard, merge};
 pub use study::{
     Cell, CellResult, Divergence, MZeta, RunOutcome, SettleTracker, Study, VERTICES, search_m_zeta,
@@ -80,7 +83,8 @@ pub enum DoaError {
         message: String,
     },
     /// A configuration value is out of its valid range.
-    #[error("{file}:{line}: field `{field}`: {message}")]
+    #[error("{file}{at}: field `{field}`: {message}",
+        at = if *.line == 0 { " (value not set in the file)".to_owned() } else { format!(":{line}") })]
     Invalid {
         /// The file (`<defaults>` for built-in values).
         file: String,

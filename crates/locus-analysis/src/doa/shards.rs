@@ -3,7 +3,7 @@
 
 use core::fmt;
 
-use super::{Cell, CellResult, DoaError};
+use super::{Cell, CellResult, DoaConfig, DoaError, GridConfig, MAX_GRID_CELLS};
 
 /// A deterministic slice `index / count` of a sweep (0-based index).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -97,7 +97,22 @@ impl DoaResult {
     }
 
     /// Parses [`to_csv`](Self::to_csv)'s form; `file` names it in errors.
+    /// Every cell must lie in the grid of the header (at most
+    /// [`MAX_GRID_CELLS`] cells) at its row-major index, with finite `v_g`
+    /// and `alpha`, `m_zeta` finite and `>= 0`, and a settling time (if any)
+    /// finite and `>= 0`.
     pub fn from_csv(text: &str, file: &str) -> Result<Self, DoaError> {
+        Self::parse_csv(text, file, None)
+    }
+
+    /// [`from_csv`](Self::from_csv) for shards of the study `config`: the
+    /// header's grid must be the configuration's and every cell's `v_g` and
+    /// `alpha` exactly the configuration's values at its row and column.
+    pub fn from_csv_of(text: &str, file: &str, config: &DoaConfig) -> Result<Self, DoaError> {
+        Self::parse_csv(text, file, Some(&config.grid))
+    }
+
+    fn parse_csv(text: &str, file: &str, grid_of: Option<&GridConfig>) -> Result<Self, DoaError> {
         let err = |line: usize, field: &str, message: String| DoaError::Csv {
             file: file.to_owned(),
             line,
@@ -130,9 +145,33 @@ impl DoaResult {
             }
         }
         let config_hash = hash.ok_or_else(|| err(1, "config", "missing or malformed".into()))?;
-        let (v_g_count, alpha_count) =
+        let (v_g_count, alpha_count): (usize, usize) =
             grid.ok_or_else(|| err(1, "grid", "missing or malformed".into()))?;
         let shard = shard.ok_or_else(|| err(1, "shard", "missing or malformed".into()))?;
+        let total = v_g_count
+            .checked_mul(alpha_count)
+            .filter(|&n| n <= MAX_GRID_CELLS)
+            .ok_or_else(|| {
+                err(
+                    1,
+                    "grid",
+                    format!(
+                        "{v_g_count}x{alpha_count} is more than the {MAX_GRID_CELLS} cells a study may have"
+                    ),
+                )
+            })?;
+        if let Some(g) = grid_of {
+            if (g.v_g_count, g.alpha_count) != (v_g_count, alpha_count) {
+                return Err(err(
+                    1,
+                    "grid",
+                    format!(
+                        "{v_g_count}x{alpha_count}, but the configuration's grid is {}x{}",
+                        g.v_g_count, g.alpha_count
+                    ),
+                ));
+            }
+        }
         match lines.next() {
             Some((_, h)) if h == CSV_HEADER => {}
             _ => return Err(err(2, "header", format!("expected `{CSV_HEADER}`"))),
@@ -168,7 +207,7 @@ impl DoaResult {
             } else {
                 Some(float(7)?)
             };
-            cells.push(CellResult {
+            let result = CellResult {
                 cell: Cell {
                     index: int(0)?,
                     i_vg: int(1)?,
@@ -179,7 +218,10 @@ impl DoaResult {
                 m_zeta: float(5)?,
                 evaluations,
                 settle,
-            });
+            };
+            check_cell(&result, (v_g_count, alpha_count, total), grid_of)
+                .map_err(|(k, message)| err(n, names[k], message))?;
+            cells.push(result);
         }
         Ok(Self {
             config_hash,
@@ -196,6 +238,74 @@ impl DoaResult {
             .iter()
             .find(|r| r.cell.i_vg == i_vg && r.cell.i_alpha == i_alpha)
     }
+}
+
+/// Whether the parsed cell `r` fits a `(rows, columns, cells)` grid and
+/// (if given) the configuration's grid `g`; else the CSV column (index in
+/// the header) and what is wrong.
+fn check_cell(
+    r: &CellResult,
+    (rows, columns, total): (usize, usize, usize),
+    g: Option<&GridConfig>,
+) -> Result<(), (usize, String)> {
+    let c = &r.cell;
+    if c.i_vg >= rows {
+        return Err((
+            1,
+            format!("{} is outside the {rows} rows of the grid", c.i_vg),
+        ));
+    }
+    if c.i_alpha >= columns {
+        return Err((
+            2,
+            format!("{} is outside the {columns} columns of the grid", c.i_alpha),
+        ));
+    }
+    if c.index >= total || c.index != c.i_vg * columns + c.i_alpha {
+        return Err((
+            0,
+            format!(
+                "{} is not the row-major index of cell ({}, {})",
+                c.index, c.i_vg, c.i_alpha
+            ),
+        ));
+    }
+    if !c.v_g.is_finite() {
+        return Err((3, format!("must be finite, got {}", c.v_g)));
+    }
+    if !c.alpha.is_finite() {
+        return Err((4, format!("must be finite, got {}", c.alpha)));
+    }
+    if !(r.m_zeta.is_finite() && r.m_zeta >= 0.0) {
+        return Err((5, format!("must be finite and >= 0, got {}", r.m_zeta)));
+    }
+    if let Some(s) = r.settle {
+        if !(s.is_finite() && s >= 0.0) {
+            return Err((7, format!("must be finite and >= 0 or empty, got {s}")));
+        }
+    }
+    if let Some(g) = g {
+        let (v_g, alpha) = (g.v_g(c.i_vg), g.alpha(c.i_alpha));
+        if c.v_g.to_bits() != v_g.to_bits() {
+            return Err((
+                3,
+                format!(
+                    "{} is not the configuration's v_g of row {} ({v_g})",
+                    c.v_g, c.i_vg
+                ),
+            ));
+        }
+        if c.alpha.to_bits() != alpha.to_bits() {
+            return Err((
+                4,
+                format!(
+                    "{} is not the configuration's alpha of column {} ({alpha})",
+                    c.alpha, c.i_alpha
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Joins shards into the whole grid: every part must have the same

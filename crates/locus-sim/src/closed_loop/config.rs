@@ -3,6 +3,7 @@
 //! table and the `"none"` gate) and its validation.
 
 use super::Error;
+use crate::scenario_file::{MAX_STEPS, within};
 
 /// How the simulated noise is generated (`"realistic"` or `"ideal"` in a
 /// scenario file).
@@ -228,87 +229,157 @@ impl SquareConfig {
     /// [`Error::Invalid`] naming the first bad field (as in a scenario
     /// file).
     pub fn validate(&self) -> Result<(), Error> {
+        // Plausible ranges (SI): a value outside is refused before a run,
+        // naming the field; the guide's tiny and huge Q and R are inside.
         let pos = |v: f64| v.is_finite() && v > 0.0;
         let range = |r: (f64, f64)| r.0.is_finite() && r.1.is_finite() && r.0 <= r.1;
         let c = &self.control;
-        let checks: [(bool, &'static str, &'static str); 23] = [
-            (pos(self.dt), "dt", "must be finite and > 0 s"),
-            (self.laps > 0, "laps", "must be >= 1"),
-            (pos(self.max_time), "max_time", "must be finite and > 0 s"),
-            (pos(self.wheelbase), "wheelbase", "must be finite and > 0 m"),
+        let checks: [(bool, &'static str, &'static str); 29] = [
             (
-                pos(self.wheel_radius),
+                within(self.dt, 1e-4, 1.0),
+                "dt",
+                "must be in [1e-4, 1] s (and max_time / dt at most 1e7 steps)",
+            ),
+            (
+                (1..=10_000).contains(&self.laps),
+                "laps",
+                "must be in [1, 10000]",
+            ),
+            (
+                within(self.max_time, 1e-4, 1e7),
+                "max_time",
+                "must be in [1e-4, 1e7] s",
+            ),
+            (
+                self.max_time / self.dt <= MAX_STEPS,
+                "max_time",
+                "over dt makes more than 1e7 steps, the most a run may have (max_time / dt)",
+            ),
+            (
+                within(self.wheelbase, 0.01, 10.0),
+                "wheelbase",
+                "must be in [0.01, 10] m",
+            ),
+            (
+                within(self.wheel_radius, 1e-3, 1.0),
                 "wheel_radius",
-                "must be finite and > 0 m",
+                "must be in [0.001, 1] m",
             ),
-            (self.encoder_lines > 0, "encoder_lines", "must be >= 1"),
             (
-                pos(self.encoder_gear),
+                (1..=1_000_000).contains(&self.encoder_lines),
+                "encoder_lines",
+                "must be in [1, 1000000]",
+            ),
+            (
+                within(self.encoder_gear, 1e-3, 1e3),
                 "encoder_gear",
-                "must be finite and > 0",
+                "must be in [0.001, 1000]",
             ),
             (
-                self.right_scale_error.is_finite() && self.right_scale_error > -1.0,
+                self.right_scale_error > -0.5 && self.right_scale_error < 0.5,
                 "right_scale_error",
-                "must be finite and > -1",
+                "must be in (-0.5, 0.5)",
             ),
             (
-                range(self.slip_length) && self.slip_length.0 >= 0.0,
+                self.slip_bumps_per_wheel <= 1000,
+                "slip_bumps_per_wheel",
+                "must be in [0, 1000]",
+            ),
+            (
+                range(self.slip_length) && self.slip_length.0 >= 0.0 && self.slip_length.1 <= 10.0,
                 "slip_length",
-                "must be [min, max] with 0 <= min <= max (m)",
+                "must be [min, max] with 0 <= min <= max <= 10 (m)",
             ),
             (
-                range(self.slip_scale) && self.slip_scale.0 > 0.0,
+                range(self.slip_scale) && self.slip_scale.0 > 0.0 && self.slip_scale.1 <= 10.0,
                 "slip_scale",
-                "must be [min, max] with 0 < min <= max",
+                "must be [min, max] with 0 < min <= max <= 10",
             ),
             (
-                self.start.iter().all(|v| v.is_finite()),
+                self.start.iter().all(|v| within(*v, -100.0, 100.0)),
                 "start",
-                "must be finite",
+                "must be in [-100, 100] (m, m, rad)",
             ),
             (
-                self.initial_std.iter().all(|v| pos(*v)),
+                self.initial_std.iter().all(|v| pos(*v) && *v <= 10.0),
                 "initial_std",
-                "must be finite and > 0",
+                "must be in (0, 10] (m, m, rad)",
             ),
             (
-                pos(self.ir_spacing),
+                pos(self.ir_spacing) && self.ir_spacing <= 1.0,
                 "ir_spacing",
-                "must be finite and > 0 m",
+                "must be in (0, 1] m",
             ),
             (
-                self.ir_sigma.is_finite() && self.ir_sigma >= 0.0,
+                within(self.ir_sigma, 0.0, 1.0),
                 "ir_sigma",
-                "must be finite and >= 0 m",
+                "must be in [0, 1] m",
             ),
             (
-                pos(self.association_range),
+                pos(self.association_range) && self.association_range <= 10.0,
                 "association_range",
-                "must be finite and > 0 m",
+                "must be in (0, 10] m",
             ),
-            (pos(self.q11), "q11", "must be finite and > 0 m^2"),
-            (pos(self.q22), "q22", "must be finite and > 0 rad^2"),
-            (pos(self.r11), "r11", "must be finite and > 0 m^2"),
-            (pos(self.r22), "r22", "must be finite and > 0 m^2"),
+            (
+                within(self.q11, 1e-16, 10.0),
+                "q11",
+                "must be in [1e-16, 10] m^2",
+            ),
+            (
+                within(self.q22, 1e-16, 1e5),
+                "q22",
+                "must be in [1e-16, 1e5] rad^2",
+            ),
+            (
+                within(self.r11, 1e-12, 1.0),
+                "r11",
+                "must be in [1e-12, 1] m^2",
+            ),
+            (
+                within(self.r22, 1e-12, 1.0),
+                "r22",
+                "must be in [1e-12, 1] m^2",
+            ),
             (
                 self.gate_confidence
                     .is_none_or(|g| g.is_finite() && g > 0.0 && g < 1.0),
                 "gate_confidence",
                 "must be in (0, 1) or \"none\"",
             ),
-            (pos(c.v_ref), "control.v_ref", "must be finite and > 0 m/s"),
             (
-                pos(c.w_ref),
-                "control.w_ref",
-                "must be finite and > 0 rad/s",
+                pos(c.v_ref) && c.v_ref <= 10.0,
+                "control.v_ref",
+                "must be in (0, 10] m/s",
             ),
             (
-                [c.k_cross, c.k_heading, c.k_pos, c.pos_tol, c.heading_tol]
-                    .iter()
-                    .all(|v| pos(*v)),
-                "control",
-                "gains and tolerances must be finite and > 0",
+                pos(c.w_ref) && c.w_ref <= 100.0,
+                "control.w_ref",
+                "must be in (0, 100] rad/s",
+            ),
+            (
+                pos(c.k_cross) && c.k_cross <= 1e3,
+                "control.k_cross",
+                "must be in (0, 1000] rad/m",
+            ),
+            (
+                pos(c.k_heading) && c.k_heading <= 1e3,
+                "control.k_heading",
+                "must be in (0, 1000] 1/s",
+            ),
+            (
+                pos(c.k_pos) && c.k_pos <= 1e3,
+                "control.k_pos",
+                "must be in (0, 1000] 1/s",
+            ),
+            (
+                pos(c.pos_tol) && c.pos_tol <= 10.0,
+                "control.pos_tol",
+                "must be in (0, 10] m",
+            ),
+            (
+                pos(c.heading_tol) && c.heading_tol <= 4.0,
+                "control.heading_tol",
+                "must be in (0, 4] rad",
             ),
         ];
         match checks.iter().find(|(ok, _, _)| !ok) {

@@ -6,6 +6,7 @@ use locus_odometry::redundant::Selection;
 use serde::{Deserialize, Serialize};
 
 use crate::closed_loop::Error;
+use crate::scenario_file::{MAX_STEPS, within};
 
 /// The slip-rejection rule of the redundant odometry (spec section 5).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
@@ -152,77 +153,128 @@ impl TricycleSlipConfig {
     /// [`Error::Invalid`] naming the first bad field.
     pub fn validate(&self) -> Result<(), Error> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
-        let non_neg = |v: f64| v.is_finite() && v >= 0.0;
-        let checks: [(bool, &'static str, &'static str); 18] = [
-            (pos(self.dt), "dt", "must be finite and > 0"),
-            (pos(self.speed), "speed", "must be finite and > 0"),
+        // Plausible ranges (SI), and the path (straight, then the arc)
+        // driven in at most 1e7 steps.
+        let path = self.straight + self.arc_radius * self.arc_angle;
+        let checks: [(bool, &'static str, &'static str); 20] = [
             (
-                non_neg(self.straight),
+                within(self.dt, 1e-4, 1.0),
+                "dt",
+                "must be in [1e-4, 1] s (a run is at most 1e7 steps)",
+            ),
+            (
+                within(self.speed, 1e-3, 100.0),
+                "speed",
+                "must be in [0.001, 100] m/s",
+            ),
+            (
+                within(self.straight, 0.0, 1e4),
                 "straight",
-                "must be finite and >= 0",
+                "must be in [0, 10000] m",
             ),
-            (pos(self.arc_radius), "arc_radius", "must be finite and > 0"),
             (
-                non_neg(self.arc_angle),
+                pos(self.arc_radius) && self.arc_radius <= 1e4,
+                "arc_radius",
+                "must be in (0, 10000] m",
+            ),
+            (
+                within(self.arc_angle, 0.0, 100.0),
                 "arc_angle",
-                "must be finite and >= 0",
+                "must be in [0, 100] rad",
             ),
             (
-                pos(self.rear_radius) && pos(self.front_radius),
+                path / self.speed / self.dt <= MAX_STEPS,
+                "dt",
+                "makes more than 1e7 steps over the path ((straight + arc_radius arc_angle) / speed / dt), the most a run may have",
+            ),
+            (
+                within(self.rear_radius, 1e-3, 1.0) && within(self.front_radius, 1e-3, 1.0),
                 "rear_radius",
-                "and front_radius must be finite and > 0",
+                "and front_radius must be in [0.001, 1] m",
             ),
-            (pos(self.track), "track", "must be finite and > 0"),
-            (pos(self.wheelbase), "wheelbase", "must be finite and > 0"),
-            (self.encoder_lines > 0, "encoder_lines", "must be >= 1"),
             (
-                non_neg(self.bump_start)
-                    && non_neg(self.bump_length)
-                    && non_neg(self.bump_spacing)
-                    && pos(self.bump_scale),
+                within(self.track, 0.01, 10.0),
+                "track",
+                "must be in [0.01, 10] m",
+            ),
+            (
+                within(self.wheelbase, 0.01, 10.0),
+                "wheelbase",
+                "must be in [0.01, 10] m",
+            ),
+            (
+                (1..=1_000_000).contains(&self.encoder_lines),
+                "encoder_lines",
+                "must be in [1, 1000000]",
+            ),
+            (
+                self.bump_count <= 1000,
+                "bump_count",
+                "must be in [0, 1000]",
+            ),
+            (
+                within(self.bump_start, 0.0, 1e4)
+                    && within(self.bump_length, 0.0, 1e4)
+                    && within(self.bump_spacing, 0.0, 1e4)
+                    && pos(self.bump_scale)
+                    && self.bump_scale <= 10.0,
                 "bump_start",
-                "must be >= 0, and bump_length, bump_spacing >= 0 and bump_scale > 0",
+                "must be in [0, 10000] m, and bump_length, bump_spacing in [0, 10000] m and bump_scale in (0, 10]",
             ),
             (
-                non_neg(self.patch_start) && non_neg(self.patch_length) && pos(self.patch_scale),
+                within(self.patch_start, 0.0, 1e4)
+                    && within(self.patch_length, 0.0, 1e4)
+                    && pos(self.patch_scale)
+                    && self.patch_scale <= 10.0,
                 "patch_start",
-                "must be >= 0, and patch_length >= 0 and patch_scale > 0",
+                "must be in [0, 10000] m, and patch_length in [0, 10000] m and patch_scale in (0, 10]",
             ),
             (
-                non_neg(self.travel_noise),
+                within(self.travel_noise, 0.0, 1.0),
                 "travel_noise",
-                "must be finite and >= 0",
+                "must be in [0, 1] m",
             ),
             (
-                non_neg(self.count_var_floor) && non_neg(self.count_var_per_count),
+                within(self.count_var_floor, 0.0, 1e6)
+                    && within(self.count_var_per_count, 0.0, 1e6),
                 "count_var_floor",
-                "and count_var_per_count must be finite and >= 0",
+                "and count_var_per_count must be in [0, 1e6] counts^2",
             ),
             (
-                self.beams.iter().flatten().all(|v| v.is_finite()),
+                self.beams
+                    .iter()
+                    .flatten()
+                    .all(|v| within(*v, -100.0, 100.0)),
                 "beams",
-                "must be finite",
+                "must be in [-100, 100] (m, m, rad)",
             ),
             (
-                pos(self.laser_sigma) && pos(self.laser_max_range),
+                pos(self.laser_sigma)
+                    && self.laser_sigma <= 10.0
+                    && pos(self.laser_max_range)
+                    && self.laser_max_range <= 1e4,
                 "laser_sigma",
-                "and laser_max_range must be finite and > 0",
+                "must be in (0, 10] m and laser_max_range in (0, 10000] m",
             ),
-            (self.laser_period >= 1, "laser_period", "must be >= 1"),
             (
-                self.room.iter().all(|v| v.is_finite())
+                (1..=1_000_000).contains(&self.laser_period),
+                "laser_period",
+                "must be in [1, 1000000]",
+            ),
+            (
+                self.room.iter().all(|v| within(*v, -1e4, 1e4))
                     && self.room[0] < self.room[2]
                     && self.room[1] < self.room[3],
                 "room",
-                "must be finite with x_min < x_max and y_min < y_max",
+                "must be in [-10000, 10000] m with x_min < x_max and y_min < y_max",
             ),
             (
-                self.initial_std.iter().all(|v| pos(*v))
+                self.initial_std.iter().all(|v| pos(*v) && *v <= 10.0)
                     && self
                         .gate_confidence
                         .is_none_or(|c| c.is_finite() && c > 0.0 && c < 1.0),
                 "initial_std",
-                "must be > 0 and gate_confidence in (0, 1)",
+                "must be in (0, 10] and gate_confidence in (0, 1)",
             ),
         ];
         match checks.iter().find(|(ok, _, _)| !ok) {

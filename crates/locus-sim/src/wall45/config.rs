@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::closed_loop::Error;
+use crate::scenario_file::within;
 
 /// Table III of seed 000 (spec section 2), as the paper gives it: for each
 /// instant 1..=6, `[real x (cm), real y (cm), real theta (deg), EKF x (cm),
@@ -145,59 +146,86 @@ impl Wall45Config {
     /// [`Error::Invalid`] naming the first bad field.
     pub fn validate(&self) -> Result<(), Error> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
-        let non_neg = |v: f64| v.is_finite() && v >= 0.0;
+        // Plausible ranges (SI): the path is Table III's (about 0.5 m and
+        // 1.1 rad), so with these bounds a run stays far below 1e7 steps.
         let checks: [(bool, &'static str, &'static str); 16] = [
-            (pos(self.dt), "dt", "must be finite and > 0"),
-            (pos(self.speed), "speed", "must be finite and > 0"),
-            (pos(self.turn_rate), "turn_rate", "must be finite and > 0"),
             (
-                non_neg(self.dwell) && self.dwell >= 0.5 * self.dt,
+                within(self.dt, 1e-4, 1.0),
+                "dt",
+                "must be in [1e-4, 1] s (a run is at most 1e7 steps)",
+            ),
+            (
+                within(self.speed, 1e-3, 10.0),
+                "speed",
+                "must be in [0.001, 10] m/s",
+            ),
+            (
+                within(self.turn_rate, 1e-3, 10.0),
+                "turn_rate",
+                "must be in [0.001, 10] rad/s",
+            ),
+            (
+                within(self.dwell, 0.5 * self.dt, 100.0),
                 "dwell",
-                "must be finite and >= dt / 2 (one step at rest per instant)",
+                "must be in [dt / 2, 100] s (one step at rest per instant)",
             ),
-            (self.wall_a.is_finite(), "wall_a", "must be finite"),
-            (pos(self.track), "track", "must be finite and > 0"),
             (
-                self.track_error.is_finite() && self.track_error > -1.0,
+                within(self.wall_a, -100.0, 100.0),
+                "wall_a",
+                "must be in [-100, 100] m",
+            ),
+            (
+                within(self.track, 0.01, 10.0),
+                "track",
+                "must be in [0.01, 10] m",
+            ),
+            (
+                self.track_error > -0.5 && self.track_error < 0.5,
                 "track_error",
-                "must be finite and > -1",
+                "must be in (-0.5, 0.5)",
             ),
             (
-                non_neg(self.true_speed_sigma),
+                within(self.true_speed_sigma, 0.0, 10.0),
                 "true_speed_sigma",
-                "must be finite and >= 0",
+                "must be in [0, 10] m/s",
             ),
             (
-                pos(self.filter_speed_sigma),
+                pos(self.filter_speed_sigma) && self.filter_speed_sigma <= 10.0,
                 "filter_speed_sigma",
-                "must be finite and > 0",
+                "must be in (0, 10] m/s",
             ),
             (
-                pos(self.rest_speed_sigma),
+                pos(self.rest_speed_sigma) && self.rest_speed_sigma <= 10.0,
                 "rest_speed_sigma",
-                "must be finite and > 0",
+                "must be in (0, 10] m/s",
             ),
             (
-                self.mount.iter().all(|v| v.is_finite()),
+                self.mount.iter().all(|v| within(*v, -10.0, 10.0)),
                 "mount",
-                "must be finite",
+                "must be in [-10, 10] (m, m, rad)",
             ),
             (
-                pos(self.laser_sigma_rest),
+                pos(self.laser_sigma_rest) && self.laser_sigma_rest <= 10.0,
                 "laser_sigma_rest",
-                "must be finite and > 0",
+                "must be in (0, 10] m",
             ),
             (
-                pos(self.laser_sigma_moving),
+                pos(self.laser_sigma_moving) && self.laser_sigma_moving <= 10.0,
                 "laser_sigma_moving",
-                "must be finite and > 0",
+                "must be in (0, 10] m",
             ),
-            (pos(self.max_range), "max_range", "must be finite and > 0"),
             (
-                self.start_estimate.iter().all(|v| v.is_finite())
-                    && self.initial_std.iter().all(|v| pos(*v)),
+                pos(self.max_range) && self.max_range <= 1000.0,
+                "max_range",
+                "must be in (0, 1000] m",
+            ),
+            (
+                self.start_estimate
+                    .iter()
+                    .all(|v| within(*v, -100.0, 100.0))
+                    && self.initial_std.iter().all(|v| pos(*v) && *v <= 10.0),
                 "start_estimate",
-                "must be finite and initial_std finite and > 0",
+                "must be in [-100, 100] (m, m, rad) and initial_std in (0, 10]",
             ),
             (
                 self.gate_confidence

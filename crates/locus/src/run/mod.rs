@@ -12,7 +12,7 @@
 
 mod monte_carlo;
 
-use std::fs::{self, File};
+use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
@@ -111,6 +111,9 @@ fn square_config(args: &RunArgs, mut cfg: SquareConfig) -> Result<SquareConfig> 
         #[allow(clippy::cast_precision_loss)]
         let needed = MAX_TIME_PER_LAP * laps as f64;
         cfg.max_time = cfg.max_time.max(needed);
+        // The longer time limit must still make a run of bounded steps.
+        cfg.validate()
+            .with_context(|| format!("--laps {laps} (at most {MAX_TIME_PER_LAP} s per lap)"))?;
     }
     Ok(cfg)
 }
@@ -283,7 +286,9 @@ where
     E: core::error::Error + Send + Sync + 'static,
     F: Fn(u64, &mut dyn FnMut(&R)) -> Result<Summary, E> + Sync,
 {
-    fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    // Whatever `out` holds from an earlier run goes first: a run killed
+    // midway leaves only its own partial outputs.
+    crate::output::prepare_run_dir(out)?;
     if args.runs > 1 {
         return monte_carlo::monte_carlo(args, info, out, runner);
     }
