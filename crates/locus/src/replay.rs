@@ -69,38 +69,38 @@ struct Common {
     #[arg(long)]
     out: Option<PathBuf>,
     /// Chi-square gate confidence in (0, 1).
-    #[arg(long, default_value_t = Config::default().gate.unwrap_or(0.99))]
+    #[arg(long, default_value_t = Config::default().gate.unwrap_or(0.99), value_parser = crate::args::positive_f64)]
     gate: f64,
     /// No gate: apply every sighting.
     #[arg(long)]
     no_gate: bool,
     /// Power spectral density of the forward-speed noise, m^2/s.
     /// Default: the log's `noise` record, else 0.01.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::args::positive_f64)]
     q_v: Option<f64>,
     /// Power spectral density of the turn-rate noise, rad^2/s.
     /// Default: the log's `noise` record, else 0.02.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::args::positive_f64)]
     q_omega: Option<f64>,
     /// Range noise standard deviation, m.
     /// Default: the log's `noise` record, else 1.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::args::positive_f64)]
     sigma_range: Option<f64>,
     /// Bearing noise standard deviation, rad.
     /// Default: the log's `noise` record, else 0.01.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::args::positive_f64)]
     sigma_bearing: Option<f64>,
     /// Initial value of the forward-speed scale factor (a state the filter
     /// estimates: the logged speed times it is the robot's).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::args::positive_f64)]
     v_scale: f64,
     /// Initial value of the turn-rate scale factor (estimated, as
     /// `--v-scale`).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::args::positive_f64)]
     omega_scale: f64,
     /// Student-t degrees of freedom of the sightings' noise: sightings far
     /// from the prediction are down-weighted rather than only gated.
-    #[arg(long, default_value_t = 4.0)]
+    #[arg(long, default_value_t = 4.0, value_parser = crate::args::positive_f64)]
     robust_dof: f64,
     /// Gaussian sightings: no Student-t weighting (the gate alone).
     #[arg(long)]
@@ -108,7 +108,7 @@ struct Common {
     /// How long after an odometry record the robot moves as it says, s.
     /// Default: estimated from the log (the delay of smallest innovation
     /// likelihood on a grid from 0 to 0.4 s).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::args::finite_f64)]
     odometry_delay: Option<f64>,
     /// Also estimate the noise from the log (EM over the smoother and
     /// innovation likelihood, no ground truth; see docs/replay.md: more
@@ -266,9 +266,8 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
     writeln!(csv, "{}", locus_replay::Step::csv_header())
         .with_context(|| format!("writing {}", csv_path.display()))?;
 
-    // With --smooth, the smoothed trajectory goes to smoothed.csv; without,
-    // a smoothed.csv of an earlier run in this folder is removed so that it
-    // is not taken for this run's.
+    // With --smooth, the smoothed trajectory goes to smoothed.csv
+    // (prepare_run_dir removed an earlier run's).
     let smoothed_path = out.join("smoothed.csv");
     let mut smoothed_csv = if cfg.smooth {
         let file = File::create(&smoothed_path)
@@ -278,12 +277,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
             .with_context(|| format!("writing {}", smoothed_path.display()))?;
         Some(w)
     } else {
-        match fs::remove_file(&smoothed_path) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                return Err(e).with_context(|| format!("removing {}", smoothed_path.display()));
-            }
-            _ => None,
-        }
+        None
     };
     let total = (log.odometry.len() + log.sightings.len()) as u64;
     let bar = progress_bar(total, "{pos}/{len} events, {elapsed} elapsed")?;

@@ -282,3 +282,27 @@ fn tune_refuses_overlapping_robot_sets_before_any_work() {
         "{stderr}"
     );
 }
+
+#[test]
+fn replay_noise_and_scale_flags_are_checked_before_the_log_is_read() {
+    // The log does not exist: a flag checked only after reading it would
+    // be reported as a missing file, not as the flag.
+    for (flag, value) in [
+        ("--q-v", "NaN"),
+        ("--sigma-range", "-1"),
+        ("--v-scale", "0"),
+        ("--robust-dof", "inf"),
+        ("--odometry-delay", "NaN"),
+        ("--gate", "-0.5"),
+    ] {
+        let out = locus(&[
+            "replay",
+            "csv",
+            "/nonexistent/log.csv",
+            &format!("{flag}={value}"),
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{flag} {value}: {stderr}");
+        assert!(stderr.contains(flag), "{flag} {value}: {stderr}");
+    }
+}
