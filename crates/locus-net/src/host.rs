@@ -49,7 +49,8 @@ use locus_link::{
 use locus_models::{Localiser, LocaliserConfig, Segment};
 
 use crate::plausible::{Implausible, Limits};
-use crate::{Error, at_least_1us, is_timeout};
+use crate::transport::{Transport, Udp};
+use crate::{Error, at_least_1us};
 
 /// Buckets in the clock estimator's window.
 const CLOCK_WINDOW: usize = 64;
@@ -455,36 +456,36 @@ pub struct HostReport {
     pub latency: Vec<f64>,
 }
 
-/// Runs the host on `socket`, talking to the robot at `robot`, calling
-/// `on_step` after each applied telemetry packet.
+/// Runs the host on `socket`, talking to the robot at `robot` over UDP
+/// ([`run_host_over`] on [`Udp::to`]).
 ///
 /// # Errors
-/// [`Error::Timeout`] if no telemetry arrives within `handshake`; socket
-/// and configuration errors.
+/// As [`run_host_over`].
 pub fn run_host(
     socket: &UdpSocket,
     robot: SocketAddr,
     cfg: &HostConfig,
     on_step: &mut impl FnMut(&HostStep),
 ) -> Result<HostReport, Error> {
+    run_host_over(&mut Udp::to(socket, robot), cfg, on_step)
+}
+
+/// Runs the host over `link`, calling `on_step` after each applied
+/// telemetry packet.
+///
+/// # Errors
+/// [`Error::Timeout`] if no telemetry arrives within `handshake`; link
+/// and configuration errors.
+pub fn run_host_over(
+    link: &mut impl Transport,
+    cfg: &HostConfig,
+    on_step: &mut impl FnMut(&HostStep),
+) -> Result<HostReport, Error> {
     let mut host = Host::new(cfg)?;
     let mut buf = [0u8; 2048];
-    let mut out = [0u8; MAX_PACKET];
     let mut commands_sent = 0u64;
     let mut latency = Vec::new();
-    let mut sequence = 0u32;
-    let mut send = |socket: &UdpSocket, ack: u32, [right, left]: [f32; 2]| -> Result<(), Error> {
-        let c = CommandPacket {
-            sequence,
-            ack,
-            right,
-            left,
-        };
-        let n = c.encode(&mut out).map_err(Error::Encode)?;
-        socket.send_to(&out[..n], robot)?;
-        sequence = sequence.wrapping_add(1);
-        Ok(())
-    };
+    let mut commands = Commands::default();
 
     let origin = Instant::now();
     let handshake_end = origin + cfg.handshake;
@@ -499,7 +500,7 @@ pub fn run_host(
                     return Err(Error::Timeout("waiting for the robot's first telemetry"));
                 }
                 if now >= next_hello {
-                    send(socket, NO_ACK, [0.0, 0.0])?;
+                    commands.send(link, NO_ACK, [0.0, 0.0])?;
                     commands_sent += 1;
                     next_hello = now + cfg.resend;
                 }
@@ -513,19 +514,10 @@ pub fn run_host(
                 end - now
             }
         };
-        socket.set_read_timeout(Some(at_least_1us(wait)))?;
-        let (n, from) = match socket.recv_from(&mut buf) {
-            Ok(r) => r,
-            Err(e) if is_timeout(&e) => continue,
-            // A hello sent before the robot bound its port comes back as
-            // "connection refused" on some systems: keep trying.
-            Err(e) if e.kind() == std::io::ErrorKind::ConnectionRefused => continue,
-            Err(e) => return Err(e.into()),
+        let Some(n) = link.recv(&mut buf, at_least_1us(wait))? else {
+            continue;
         };
         let received = Instant::now();
-        if from != robot {
-            continue;
-        }
         match host.receive(&buf[..n], (received - origin).as_secs_f64()) {
             Outcome::Undecodable => {
                 last_rx.get_or_insert(received);
@@ -538,7 +530,7 @@ pub fn run_host(
             Outcome::Applied(step) => {
                 last_rx = Some(received);
                 if let Some(speeds) = step.command {
-                    send(socket, step.sequence, speeds)?;
+                    commands.send(link, step.sequence, speeds)?;
                     commands_sent += 1;
                     latency.push(received.elapsed().as_secs_f64());
                 }
@@ -556,4 +548,33 @@ pub fn run_host(
         latency,
         estimates: host.estimates,
     })
+}
+
+/// The host's outgoing command packets, numbered from 0.
+#[derive(Debug, Default)]
+struct Commands {
+    sequence: u32,
+}
+
+impl Commands {
+    /// Sends wheel speeds `[right, left]` (m/s) acknowledging telemetry
+    /// `ack`.
+    fn send(
+        &mut self,
+        link: &mut impl Transport,
+        ack: u32,
+        [right, left]: [f32; 2],
+    ) -> Result<(), Error> {
+        let mut out = [0u8; MAX_PACKET];
+        let c = CommandPacket {
+            sequence: self.sequence,
+            ack,
+            right,
+            left,
+        };
+        let n = c.encode(&mut out).map_err(Error::Encode)?;
+        link.send(&out[..n])?;
+        self.sequence = self.sequence.wrapping_add(1);
+        Ok(())
+    }
 }

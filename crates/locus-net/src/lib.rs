@@ -17,6 +17,7 @@
 
 pub mod host;
 pub mod plausible;
+pub mod transport;
 
 use core::time::Duration;
 

@@ -21,14 +21,14 @@
 //! 4. End after `idle_exit` s of robot time without a command, or at
 //!    `max_time` of the scenario.
 
-use core::net::SocketAddr;
 use core::time::Duration;
 use std::net::UdpSocket;
 use std::time::Instant;
 
 use locus_link::{CommandPacket, MAX_PACKET, Receiver, Status, Telemetry};
 use locus_net::host::HostConfig;
-use locus_net::{Error as LinkError, at_least_1us, is_timeout};
+use locus_net::transport::{Transport, Udp};
+use locus_net::{Error as LinkError, at_least_1us};
 use locus_odometry::{Wheel as EncoderWheel, wrapping_diff};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
@@ -247,14 +247,24 @@ impl Sim {
     }
 }
 
-/// Runs the robot endpoint on `socket` until the host goes quiet.
+/// Runs the robot endpoint on `socket` over UDP until the host goes quiet
+/// ([`run_robot_over`] on [`Udp::listen`]: telemetry goes to the sender of
+/// the newest valid command).
+///
+/// # Errors
+/// As [`run_robot_over`].
+pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, Error> {
+    run_robot_over(&mut Udp::listen(socket), cfg)
+}
+
+/// Runs the robot endpoint over `link` until the host goes quiet.
 ///
 /// # Errors
 /// [`locus_net::Error::Timeout`] (as [`Error::Link`]) if no host command
-/// arrives within `handshake`; socket, configuration and simulator errors.
+/// arrives within `handshake`; link, configuration and simulator errors.
 #[allow(clippy::cast_precision_loss, clippy::cast_possible_truncation)]
 #[allow(clippy::cast_sign_loss, clippy::too_many_lines)]
-pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, Error> {
+pub fn run_robot_over(link: &mut impl Transport, cfg: &RobotConfig) -> Result<RobotReport, Error> {
     cfg.validate()?;
     let dt = cfg.square.dt;
     let mut sim = Sim::new(&cfg.square, cfg.seed)?;
@@ -264,20 +274,16 @@ pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, E
 
     // 1. Handshake: the first valid command names the host.
     let deadline = Instant::now() + cfg.handshake;
-    let (mut host, mut command): (SocketAddr, CommandPacket) = loop {
+    let mut command: CommandPacket = loop {
         let now = Instant::now();
         if now >= deadline {
             return Err(LinkError::Timeout("waiting for the host's first command").into());
         }
-        socket.set_read_timeout(Some(at_least_1us(deadline - now)))?;
-        match socket.recv_from(&mut buf) {
-            Ok((n, from)) => {
-                if let Ok((c, Status::Applied { .. })) = receiver.receive_command(&buf[..n]) {
-                    break (from, clamp(c, cfg.max_wheel_speed));
-                }
+        if let Some(n) = link.recv(&mut buf, at_least_1us(deadline - now))? {
+            if let Ok((c, Status::Applied { .. })) = receiver.receive_command(&buf[..n]) {
+                link.follow_sender();
+                break clamp(c, cfg.max_wheel_speed);
             }
-            Err(e) if is_timeout(&e) => {}
-            Err(e) => return Err(e.into()),
         }
     };
 
@@ -295,10 +301,9 @@ pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, E
     let n = Telemetry::new(0, 0)
         .encode(&mut out)
         .map_err(LinkError::Encode)?;
-    socket.send_to(&out[..n], host)?;
+    link.send(&out[..n])?;
     report.sent += 1;
 
-    socket.set_nonblocking(true)?;
     let start = Instant::now();
     let mut last_command_time = 0.0;
     let mut stopped = false;
@@ -308,18 +313,14 @@ pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, E
         let due = start + Duration::from_secs_f64(k as f64 * dt / cfg.time_scale);
         let robot_time_prev = (k - 1) as f64 * dt;
         loop {
-            match socket.recv_from(&mut buf) {
-                Ok((n, from)) => {
-                    if let Ok((c, Status::Applied { .. })) = receiver.receive_command(&buf[..n]) {
-                        command = clamp(c, cfg.max_wheel_speed);
-                        report.clamped += u64::from(command != c);
-                        host = from;
-                        last_command_time = robot_time_prev;
-                    }
-                    continue;
+            if let Some(n) = link.recv(&mut buf, Duration::ZERO)? {
+                if let Ok((c, Status::Applied { .. })) = receiver.receive_command(&buf[..n]) {
+                    command = clamp(c, cfg.max_wheel_speed);
+                    report.clamped += u64::from(command != c);
+                    link.follow_sender();
+                    last_command_time = robot_time_prev;
                 }
-                Err(e) if is_timeout(&e) => {}
-                Err(e) => return Err(e.into()),
+                continue;
             }
             let now = Instant::now();
             if now >= due {
@@ -352,13 +353,12 @@ pub fn run_robot(socket: &UdpSocket, cfg: &RobotConfig) -> Result<RobotReport, E
         t.counts = sim.counts;
         t.ir = ir;
         let n = t.encode(&mut out).map_err(LinkError::Encode)?;
-        socket.send_to(&out[..n], host)?;
+        link.send(&out[..n])?;
         report.sent += 1;
         report.ticks = k;
         report.sim_time = k as f64 * dt;
         report.truth.push((seq, pose));
     }
-    socket.set_nonblocking(false)?;
     report.commands = receiver.counters();
     Ok(report)
 }

@@ -1,0 +1,146 @@
+//! How packets travel between robot and host: one [`Transport`] trait and
+//! its implementations, so that the host and robot loops do not care
+//! whether the link is UDP datagrams or a byte stream (a serial port, a
+//! Bluetooth SPP link appearing as `/dev/rfcomm0`).
+//!
+//! - [`Udp`]: one packet per datagram (`docs/protocol.md`, "Transport:
+//!   UDP").
+//! - [`Serial`]: COBS frames on a byte stream (`docs/protocol.md`,
+//!   "Transport: byte streams"), resynchronising after garbage, a cut
+//!   frame or a lost byte, and counting what it drops.
+
+use core::net::SocketAddr;
+use core::time::Duration;
+use std::net::UdpSocket;
+use std::time::Instant;
+
+use crate::{Error, at_least_1us, is_timeout};
+
+/// One end of a link: sends and receives whole packets.
+pub trait Transport {
+    /// Sends one packet to the peer.
+    ///
+    /// # Errors
+    /// The link failed (or, on UDP, no peer is known yet).
+    fn send(&mut self, packet: &[u8]) -> Result<(), Error>;
+
+    /// Waits at most `timeout` (zero: takes only what has already arrived)
+    /// for one packet from the peer and copies it into `buf`; `Ok(None)`
+    /// if none came in time. A packet longer than `buf` is cut to it (the
+    /// codec then rejects it).
+    ///
+    /// # Errors
+    /// The link failed.
+    fn recv(&mut self, buf: &mut [u8], timeout: Duration) -> Result<Option<usize>, Error>;
+
+    /// The packet received last was valid: answer its sender from now on.
+    /// On UDP the robot learns the host's address this way; a
+    /// point-to-point link has one peer and ignores it.
+    fn follow_sender(&mut self) {}
+}
+
+/// UDP: one packet per datagram.
+#[derive(Debug)]
+pub struct Udp<'a> {
+    socket: &'a UdpSocket,
+    /// Where packets go, and (if `fixed`) the only source accepted.
+    peer: Option<SocketAddr>,
+    /// Whether `peer` is fixed (the host) or follows valid senders (the
+    /// robot).
+    fixed: bool,
+    /// Source of the last datagram received.
+    last_from: Option<SocketAddr>,
+    /// The socket's blocking mode as last set.
+    nonblocking: Option<bool>,
+}
+
+impl<'a> Udp<'a> {
+    /// A link to `peer` on `socket`: packets go there, and datagrams from
+    /// anywhere else are ignored (the host's side).
+    pub fn to(socket: &'a UdpSocket, peer: SocketAddr) -> Self {
+        Self {
+            socket,
+            peer: Some(peer),
+            fixed: true,
+            last_from: None,
+            nonblocking: None,
+        }
+    }
+
+    /// A link that answers whoever sent the last valid packet
+    /// ([`Transport::follow_sender`]; the robot's side).
+    pub fn listen(socket: &'a UdpSocket) -> Self {
+        Self {
+            socket,
+            peer: None,
+            fixed: false,
+            last_from: None,
+            nonblocking: None,
+        }
+    }
+
+    /// The peer packets go to (`None` before the first valid packet of a
+    /// listening link).
+    pub fn peer(&self) -> Option<SocketAddr> {
+        self.peer
+    }
+
+    fn set_nonblocking(&mut self, on: bool) -> Result<(), Error> {
+        if self.nonblocking != Some(on) {
+            self.socket.set_nonblocking(on)?;
+            self.nonblocking = Some(on);
+        }
+        Ok(())
+    }
+}
+
+impl Transport for Udp<'_> {
+    fn send(&mut self, packet: &[u8]) -> Result<(), Error> {
+        let peer = self
+            .peer
+            .ok_or(Error::Config("no peer to send to yet (UDP)"))?;
+        self.socket.send_to(packet, peer)?;
+        Ok(())
+    }
+
+    fn recv(&mut self, buf: &mut [u8], timeout: Duration) -> Result<Option<usize>, Error> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            if timeout.is_zero() {
+                self.set_nonblocking(true)?;
+            } else {
+                let now = Instant::now();
+                if now >= deadline {
+                    return Ok(None);
+                }
+                self.set_nonblocking(false)?;
+                self.socket
+                    .set_read_timeout(Some(at_least_1us(deadline - now)))?;
+            }
+            match self.socket.recv_from(buf) {
+                Ok((n, from)) => {
+                    if self.fixed && Some(from) != self.peer {
+                        continue;
+                    }
+                    self.last_from = Some(from);
+                    return Ok(Some(n));
+                }
+                Err(e) if is_timeout(&e) => return Ok(None),
+                // A packet sent before the peer bound its port comes back
+                // as "connection refused" on some systems: not an error.
+                Err(e) if e.kind() == std::io::ErrorKind::ConnectionRefused => {
+                    if timeout.is_zero() {
+                        return Ok(None);
+                    }
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
+    }
+
+    fn follow_sender(&mut self) {
+        if !self.fixed && self.last_from.is_some() {
+            self.peer = self.last_from;
+        }
+    }
+}
