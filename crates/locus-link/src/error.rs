@@ -1,5 +1,6 @@
-//! Typed errors of the codec: one small `#[non_exhaustive]` enum, usable
-//! without `std` (`Display` and [`core::error::Error`]).
+//! Typed errors of the codec and of the byte-stream framing: small
+//! `#[non_exhaustive]` enums, usable without `std` (`Display` and
+//! [`core::error::Error`]).
 
 use core::fmt;
 
@@ -103,3 +104,40 @@ impl fmt::Display for Error {
 }
 
 impl core::error::Error for Error {}
+
+/// Why the byte-stream framing ([`FrameDecoder`](crate::FrameDecoder))
+/// dropped a frame. The decoder has already counted it
+/// ([`FrameCounters`](crate::FrameCounters)) and discards the rest of the
+/// frame up to the next delimiter. New variants may be added without a
+/// breaking change.
+///
+/// Framing errors are about the COBS layer only; a frame that decodes but
+/// whose bytes were damaged is caught by the packet decoder's CRC
+/// ([`Error::BadCrc`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum FrameError {
+    /// The frame decodes to more bytes than the decoder's buffer holds
+    /// (a lost delimiter merged frames, or line noise without a 0x00).
+    Oversize {
+        /// The decoder's buffer (bytes).
+        capacity: usize,
+    },
+    /// The delimiter arrived inside a COBS block: the last code byte
+    /// pointed past the end of the frame (a cut frame, a lost byte, or a
+    /// damaged code byte).
+    Malformed,
+}
+
+impl fmt::Display for FrameError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            FrameError::Oversize { capacity } => {
+                write!(f, "frame longer than the {capacity}-byte buffer")
+            }
+            FrameError::Malformed => f.write_str("COBS code points past the frame delimiter"),
+        }
+    }
+}
+
+impl core::error::Error for FrameError {}
