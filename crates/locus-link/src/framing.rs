@@ -174,7 +174,9 @@ pub struct FrameCounters {
     /// between every two frames; skipped, one byte each.
     pub empty: u64,
     /// Bytes discarded: those of dropped frames (with their closing
-    /// delimiter) and those before the decoder's first delimiter.
+    /// delimiter) and those before the decoder's first delimiter (with
+    /// that delimiter, unless it was the very first byte: then it is an
+    /// empty frame).
     pub discarded: u64,
 }
 
@@ -263,8 +265,9 @@ impl<const N: usize> FrameDecoder<N> {
     }
 
     /// Pushes one received byte. Returns `None` until a delimiter ends a
-    /// non-empty frame (or the frame is found oversize); then the decoded
-    /// frame or the reason it was dropped (already counted).
+    /// non-empty frame that was not already dropped, or a frame is found
+    /// oversize; then the decoded frame or the reason it was dropped
+    /// (already counted). Empty frames and discarded bytes yield nothing.
     pub fn push(&mut self, byte: u8) -> Option<Result<&[u8], FrameError>> {
         let event = self.step(byte)?;
         Some(event.map(|len| &self.buf[..len]))
