@@ -42,6 +42,7 @@ use std::time::Instant;
 
 use locus_control::{Controller, FollowPath, wheel_speeds};
 use locus_link::clock::ClockFit;
+use locus_link::framing::FrameCounters;
 use locus_link::receiver::{MAX_JUMP, RESYNC_AFTER};
 use locus_link::{
     ClockEstimator, CommandPacket, Counters, MAX_PACKET, NO_ACK, Receiver, Status, Telemetry,
@@ -451,6 +452,9 @@ pub struct HostReport {
     /// Filter errors (the packet's prediction or correction was skipped,
     /// the belief kept).
     pub filter_errors: u64,
+    /// What the transport dropped before packets were formed (COBS frames
+    /// on a byte stream; zero on UDP).
+    pub framing: FrameCounters,
     /// Wall time from a telemetry packet's reception to its command's send
     /// (s), one per command sent after the handshake.
     pub latency: Vec<f64>,
@@ -545,6 +549,7 @@ pub fn run_host_over(
         commands_sent,
         corrections: host.corrections,
         filter_errors: host.filter_errors,
+        framing: link.framing(),
         latency,
         estimates: host.estimates,
     })

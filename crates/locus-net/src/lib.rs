@@ -37,6 +37,14 @@ pub enum Error {
     /// The peer did not answer in time; the text says which step.
     #[error("timed out: {0}")]
     Timeout(&'static str),
+    /// A serial device could not be opened.
+    #[error("serial device {device}: {source}")]
+    Serial {
+        /// The device path.
+        device: String,
+        /// What went wrong.
+        source: serialport::Error,
+    },
     /// A configuration value is invalid; the text names it.
     #[error("invalid configuration: {0}")]
     Config(&'static str),

@@ -14,6 +14,9 @@ use core::time::Duration;
 use std::net::UdpSocket;
 use std::time::Instant;
 
+use locus_link::framing::{FrameCounters, FrameDecoder, MAX_FRAME, encode_frame};
+use serialport::SerialPort;
+
 use crate::{Error, at_least_1us, is_timeout};
 
 /// One end of a link: sends and receives whole packets.
@@ -37,6 +40,12 @@ pub trait Transport {
     /// On UDP the robot learns the host's address this way; a
     /// point-to-point link has one peer and ignores it.
     fn follow_sender(&mut self) {}
+
+    /// What the transport dropped before a packet was formed (frames on a
+    /// byte stream); all zero for datagrams.
+    fn framing(&self) -> FrameCounters {
+        FrameCounters::default()
+    }
 }
 
 /// UDP: one packet per datagram.
@@ -142,5 +151,111 @@ impl Transport for Udp<'_> {
         if !self.fixed && self.last_from.is_some() {
             self.peer = self.last_from;
         }
+    }
+}
+
+/// Bytes read from a serial port at a time.
+const READ_CHUNK: usize = 256;
+
+/// A byte stream (a serial port; a Bluetooth SPP link is one too): each
+/// packet travels as a COBS frame between `0x00` delimiters
+/// ([`locus_link::framing`]). Garbage, a cut frame or a lost byte cost at
+/// most the frames they touch; the decoder's counters say what was
+/// dropped, and a frame whose bytes were damaged reaches the packet decoder,
+/// which counts it as corrupt.
+pub struct Serial {
+    port: Box<dyn SerialPort>,
+    decoder: FrameDecoder,
+    /// Bytes read but not yet fed to the decoder: `rx[pos..len]`.
+    rx: [u8; READ_CHUNK],
+    pos: usize,
+    len: usize,
+}
+
+impl core::fmt::Debug for Serial {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Serial")
+            .field("framing", &self.decoder.counters())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Serial {
+    /// Opens the serial device `path` (`/dev/ttyUSB0`, `/dev/rfcomm0`, a
+    /// pseudo-terminal) at `baud` bits per second, 8 data bits, no parity,
+    /// one stop bit, no flow control.
+    ///
+    /// # Errors
+    /// [`Error::Serial`] naming the device.
+    pub fn open(path: &str, baud: u32) -> Result<Self, Error> {
+        let port = serialport::new(path, baud)
+            .timeout(Duration::from_millis(10))
+            .open()
+            .map_err(|source| Error::Serial {
+                device: path.to_string(),
+                source,
+            })?;
+        Ok(Self::new(port))
+    }
+
+    /// A framed link over an already opened port (for instance one end of
+    /// a pseudo-terminal pair).
+    pub fn new(port: Box<dyn SerialPort>) -> Self {
+        Self {
+            port,
+            decoder: FrameDecoder::new(),
+            rx: [0; READ_CHUNK],
+            pos: 0,
+            len: 0,
+        }
+    }
+}
+
+impl Transport for Serial {
+    fn send(&mut self, packet: &[u8]) -> Result<(), Error> {
+        let mut frame = [0u8; MAX_FRAME];
+        let n = encode_frame(packet, &mut frame).map_err(Error::Encode)?;
+        // No flush: on a tty it waits until the line has sent every byte
+        // (tcdrain); the kernel sends the frame on its own.
+        self.port.write_all(&frame[..n])?;
+        Ok(())
+    }
+
+    fn recv(&mut self, buf: &mut [u8], timeout: Duration) -> Result<Option<usize>, Error> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            while self.pos < self.len {
+                let (used, event) = self.decoder.feed(&self.rx[self.pos..self.len]);
+                self.pos += used;
+                // A dropped frame is already counted by the decoder.
+                if let Some(Ok(frame)) = event {
+                    let n = frame.len().min(buf.len());
+                    buf[..n].copy_from_slice(&frame[..n]);
+                    return Ok(Some(n));
+                }
+            }
+            let left = deadline.saturating_duration_since(Instant::now());
+            if left.is_zero() && !timeout.is_zero() {
+                return Ok(None);
+            }
+            self.port
+                .set_timeout(left)
+                .map_err(|e| Error::Io(e.into()))?;
+            match self.port.read(&mut self.rx) {
+                Ok(n) => {
+                    self.pos = 0;
+                    self.len = n;
+                    if n == 0 && timeout.is_zero() {
+                        return Ok(None);
+                    }
+                }
+                Err(e) if is_timeout(&e) => return Ok(None),
+                Err(e) => return Err(e.into()),
+            }
+        }
+    }
+
+    fn framing(&self) -> FrameCounters {
+        self.decoder.counters()
     }
 }

@@ -157,6 +157,9 @@ pub struct RobotReport {
     pub sent: u64,
     /// The command receiver's counters.
     pub commands: locus_link::Counters,
+    /// What the transport dropped before commands were formed (COBS frames
+    /// on a byte stream; zero on UDP).
+    pub framing: locus_link::framing::FrameCounters,
     /// Times the watchdog stopped the wheels.
     pub watchdog_stops: u64,
     /// Commands applied with a wheel speed beyond `max_wheel_speed`
@@ -291,6 +294,7 @@ pub fn run_robot_over(link: &mut impl Transport, cfg: &RobotConfig) -> Result<Ro
         truth: vec![(0, sim.robot.pose)],
         sent: 0,
         commands: receiver.counters(),
+        framing: link.framing(),
         watchdog_stops: 0,
         clamped: 0,
         on_time: 0,
@@ -360,6 +364,7 @@ pub fn run_robot_over(link: &mut impl Transport, cfg: &RobotConfig) -> Result<Ro
         report.truth.push((seq, pose));
     }
     report.commands = receiver.counters();
+    report.framing = link.framing();
     Ok(report)
 }
 

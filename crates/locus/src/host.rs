@@ -6,7 +6,8 @@ use std::net::{ToSocketAddrs, UdpSocket};
 use anyhow::Context;
 use clap::Args as ClapArgs;
 use comfy_table::Table;
-use locus_net::host::run_host;
+use locus_net::host::{HostStep, run_host, run_host_over};
+use locus_net::transport::Serial;
 use locus_sim::link_robot::host_config;
 
 use crate::link_scenario::square_config;
@@ -14,12 +15,22 @@ use crate::link_scenario::square_config;
 /// Arguments of `locus host`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
-    /// The robot's address.
-    #[arg(long, default_value = "127.0.0.1:7700")]
+    /// The robot: a UDP address (`HOST:PORT`, or `udp:HOST:PORT`), or a
+    /// serial device (`serial:/dev/ttyUSB0`; a Bluetooth SPP link is one
+    /// too, e.g. `serial:/dev/rfcomm0`), over which packets travel as COBS
+    /// frames (docs/protocol.md).
+    #[arg(
+        long,
+        default_value = "127.0.0.1:7700",
+        value_name = "ADDR|serial:DEVICE"
+    )]
     robot: String,
-    /// Local address to bind.
+    /// Local address to bind (UDP only).
     #[arg(long, default_value = "127.0.0.1:0")]
     bind: String,
+    /// Serial line speed, bits per second (serial only).
+    #[arg(long, default_value_t = 115_200)]
+    baud: u32,
     /// `square` or a scenario file whose `scenario = "square"` (the robot's
     /// geometry, the filter's Q and R, the controller).
     #[arg(default_value = "square", value_name = "SCENARIO|FILE")]
@@ -32,17 +43,9 @@ pub struct Args {
 /// Runs `locus host`.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let square = square_config(&args.scenario)?;
-    let robot = args
-        .robot
-        .to_socket_addrs()
-        .with_context(|| format!("resolving {}", args.robot))?
-        .next()
-        .with_context(|| format!("no address for {}", args.robot))?;
-    let socket =
-        UdpSocket::bind(&args.bind).with_context(|| format!("binding UDP {}", args.bind))?;
     let cfg = host_config(&square);
     let verbose = args.verbose;
-    let report = run_host(&socket, robot, &cfg, &mut |s| {
+    let mut on_step = |s: &HostStep| {
         if verbose {
             println!(
                 "{:.2} s  x {:.4} m  y {:.4} m  theta {:.4} rad{}",
@@ -53,7 +56,27 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 if s.skipped > 0 { "  (gap)" } else { "" }
             );
         }
-    })?;
+    };
+    let (peer, report) = if let Some(device) = args.robot.strip_prefix("serial:") {
+        let mut link = Serial::open(device, args.baud)?;
+        (
+            format!("serial {device} at {} baud", args.baud),
+            run_host_over(&mut link, &cfg, &mut on_step)?,
+        )
+    } else {
+        let text = args.robot.strip_prefix("udp:").unwrap_or(&args.robot);
+        let robot = text
+            .to_socket_addrs()
+            .with_context(|| format!("resolving {text} (--robot: HOST:PORT or serial:DEVICE)"))?
+            .next()
+            .with_context(|| format!("no address for {text}"))?;
+        let socket =
+            UdpSocket::bind(&args.bind).with_context(|| format!("binding UDP {}", args.bind))?;
+        (
+            format!("robot {robot}"),
+            run_host(&socket, robot, &cfg, &mut on_step)?,
+        )
+    };
     let c = report.counters;
     let mut lat: Vec<f64> = report.latency.clone();
     lat.sort_by(f64::total_cmp);
@@ -61,7 +84,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         lat.get(((lat.len().saturating_sub(1)) as f64 * p).round() as usize)
             .map_or_else(|| "-".to_string(), |v| format!("{:.1}", v * 1e6))
     };
-    println!("locus host: robot {robot}, {} laps", report.laps);
+    println!("locus host: {peer}, {} laps", report.laps);
     let mut table = Table::new();
     table.load_preset(comfy_table::presets::ASCII_MARKDOWN);
     table.set_header(vec!["quantity", "value"]);
@@ -79,6 +102,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             format!("{} / {}", c.suspect, c.implausible),
         ),
         ("resynchronisations [count]", c.resync.to_string()),
+        (
+            "serial frames dropped: malformed / oversize [count]",
+            format!("{} / {}", report.framing.malformed, report.framing.oversize),
+        ),
         (
             "filter errors (belief kept) [count]",
             report.filter_errors.to_string(),

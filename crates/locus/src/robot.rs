@@ -6,17 +6,26 @@ use std::net::UdpSocket;
 
 use anyhow::Context;
 use clap::Args as ClapArgs;
-use locus_sim::link_robot::{RobotConfig, run_robot};
+use locus_net::transport::Serial;
+use locus_sim::link_robot::{RobotConfig, run_robot, run_robot_over};
 
 use crate::link_scenario::square_config;
 
 /// Arguments of `locus robot`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
-    /// Address to listen on for the host's commands (telemetry goes back
-    /// to the sender of the newest command).
+    /// Address to listen on for the host's commands over UDP (telemetry
+    /// goes back to the sender of the newest command).
     #[arg(long, default_value = "127.0.0.1:7700")]
     udp: String,
+    /// Talk over this serial device instead of UDP (`/dev/ttyS1`, one end
+    /// of a pseudo-terminal pair...), packets as COBS frames
+    /// (docs/protocol.md).
+    #[arg(long, conflicts_with = "udp", value_name = "DEVICE")]
+    serial: Option<String>,
+    /// Serial line speed, bits per second (with --serial).
+    #[arg(long, default_value_t = 115_200)]
+    baud: u32,
     /// `square` or a scenario file whose `scenario = "square"`.
     #[arg(default_value = "square", value_name = "SCENARIO|FILE")]
     scenario: String,
@@ -62,17 +71,27 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     };
     // Every flag is checked before the socket is bound.
     cfg.validate().context("locus robot: invalid setting")?;
-    let socket = UdpSocket::bind(&args.udp).with_context(|| format!("binding UDP {}", args.udp))?;
-    eprintln!(
-        "locus robot: {} listening on {} (time scale {}); waiting for a host",
-        args.scenario,
-        socket.local_addr()?,
-        args.time_scale
-    );
-    let r = run_robot(&socket, &cfg)?;
+    let r = if let Some(device) = &args.serial {
+        let mut link = Serial::open(device, args.baud)?;
+        eprintln!(
+            "locus robot: {} on serial {device} at {} baud (time scale {}); waiting for a host",
+            args.scenario, args.baud, args.time_scale
+        );
+        run_robot_over(&mut link, &cfg)?
+    } else {
+        let socket =
+            UdpSocket::bind(&args.udp).with_context(|| format!("binding UDP {}", args.udp))?;
+        eprintln!(
+            "locus robot: {} listening on {} (time scale {}); waiting for a host",
+            args.scenario,
+            socket.local_addr()?,
+            args.time_scale
+        );
+        run_robot(&socket, &cfg)?
+    };
     let c = r.commands;
     println!(
-        "locus robot: {} ticks ({:.2} s robot time), {} telemetry packets sent; commands applied {} / lost {} / duplicate {} / late {} / corrupt {} / malformed {} / suspect {}; clamped {}; on time {:.1} %; watchdog stops {}",
+        "locus robot: {} ticks ({:.2} s robot time), {} telemetry packets sent; commands applied {} / lost {} / duplicate {} / late {} / corrupt {} / malformed {} / suspect {}; frames dropped {}; clamped {}; on time {:.1} %; watchdog stops {}",
         r.ticks,
         r.sim_time,
         r.sent,
@@ -83,6 +102,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         c.corrupt,
         c.malformed,
         c.suspect,
+        r.framing.dropped(),
         r.clamped,
         100.0 * r.on_time as f64 / r.ticks.max(1) as f64,
         r.watchdog_stops
