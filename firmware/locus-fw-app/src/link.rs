@@ -91,6 +91,7 @@ impl LinkRobot {
     /// # Errors
     /// [`locus_link::Error::NonFinite`] for a NaN or infinite reading (the
     /// counts are extended all the same).
+    #[inline(never)]
     pub fn telemetry_frame(
         &mut self,
         sequence: u32,
@@ -112,6 +113,7 @@ impl LinkRobot {
     /// here carried, if it was valid and new by its sequence number
     /// ([`Status::Applied`]); everything else (a dropped frame, a corrupt,
     /// malformed, duplicate, late or suspect packet) is only counted.
+    #[inline(never)]
     pub fn push(&mut self, byte: u8) -> Option<CommandPacket> {
         let Some(Ok(frame)) = self.decoder.push(byte) else {
             return None;

@@ -28,6 +28,7 @@
 #![no_std]
 #![no_main]
 
+mod stack;
 mod uart;
 
 use cortex_m::peripheral::SYST;
@@ -47,8 +48,12 @@ const CLOCK_HZ: u64 = 25_000_000;
 const BAUDDIV: u32 = 217;
 /// Longest wait for the host's first command (s).
 const HANDSHAKE_S: u64 = 30;
-/// Longest wait for the command acknowledging a telemetry packet (ms).
-const PACING_MS: u64 = 100;
+/// Longest wait for the command acknowledging a telemetry packet (ms):
+/// long enough for a host thread held up on a loaded machine (100 ms was
+/// exceeded once in a few runs on a 2-core VM shared with builds), shorter
+/// than the host's quiet spell (0.5 s by default), so that a lost command
+/// never ends the host's run.
+const PACING_MS: u64 = 250;
 /// Time the firmware stays on the line after the run (ms): longer than
 /// the host's quiet spell (0.5 s by default).
 const LINGER_MS: u64 = 2_000;
@@ -76,6 +81,17 @@ impl Clock {
     }
 }
 
+/// What [`Line::wait_for`] waits for.
+#[derive(Clone, Copy)]
+enum Until {
+    /// Any valid new command (the handshake).
+    AnyCommand,
+    /// A command acknowledging telemetry `k` or a later one (pacing).
+    Acknowledging(u32),
+    /// Nothing: receive and count until the time is up.
+    Timeout,
+}
+
 /// The link's state besides [`LinkRobot`]: the UART and the pacing counts.
 struct Line {
     uart: Uart,
@@ -92,14 +108,21 @@ struct Line {
 }
 
 impl Line {
-    /// Receives until a valid new command `want`s, or `ticks` pass;
-    /// whether one did.
-    fn wait_for(&mut self, ticks: u64, want: impl Fn(u32) -> bool) -> bool {
+    /// Receives until a valid new command that `until` asks for arrives,
+    /// or `ticks` pass; whether one did. (One function for every wait, not
+    /// one per closure: flash.)
+    #[inline(never)]
+    fn wait_for(&mut self, ticks: u64, until: Until) -> bool {
         let start = self.clock.now();
         loop {
             while let Some(byte) = self.uart.read() {
                 if let Some(c) = self.robot.push(byte) {
-                    if want(c.ack) {
+                    let wanted = match until {
+                        Until::AnyCommand => true,
+                        Until::Acknowledging(k) => acknowledges(c.ack, k),
+                        Until::Timeout => false,
+                    };
+                    if wanted {
                         return true;
                     }
                 }
@@ -113,6 +136,7 @@ impl Line {
 
     /// Sends telemetry `k` with the decoders' counts `now` and the reading
     /// `ir`.
+    #[inline(never)]
     fn send(&mut self, k: u32, now: [u32; 2], ir: Option<[f32; 2]>) {
         match self.robot.telemetry_frame(k, now, ir, &mut self.frame) {
             Ok(n) => self.uart.write(&self.frame[..n]),
@@ -121,8 +145,9 @@ impl Line {
     }
 
     /// Waits for the command acknowledging telemetry `k` (pacing).
+    #[inline(never)]
     fn paced(&mut self, k: u32) {
-        if self.wait_for(PACING_MS * CLOCK_HZ / 1000, |ack| acknowledges(ack, k)) {
+        if self.wait_for(PACING_MS * CLOCK_HZ / 1000, Until::Acknowledging(k)) {
             self.acknowledged += 1;
         } else {
             self.pacing_timeouts += 1;
@@ -158,6 +183,7 @@ fn main() -> ! {
     core.SYST.set_reload(0x00FF_FFFF);
     core.SYST.clear_current();
     core.SYST.enable_counter();
+    let painted_bottom = stack::paint();
     let Some(uart) = Uart::take(BAUDDIV) else {
         fail(&"UART0 already taken");
     };
@@ -179,7 +205,7 @@ fn main() -> ! {
 
     hprintln!("locus-fw-link {} waiting", env!("CARGO_PKG_VERSION"));
     // 1. Handshake.
-    if !line.wait_for(HANDSHAKE_S * CLOCK_HZ, |_| true) {
+    if !line.wait_for(HANDSHAKE_S * CLOCK_HZ, Until::AnyCommand) {
         fail(&"no command from the host within the handshake");
     }
     // 2. Telemetry 0.
@@ -198,6 +224,9 @@ fn main() -> ! {
         line.paced(k);
     }
     // 4. Report.
+    let Some(stack_high_water) = stack::high_water(painted_bottom) else {
+        fail(&"the stack went below the painted region");
+    };
     let report = fw.report();
     for (name, value) in report.floats() {
         hprintln!("{} 0x{:08x} {}", name, value.to_bits(), value);
@@ -212,9 +241,12 @@ fn main() -> ! {
     hprintln!("acknowledged {}", line.acknowledged);
     hprintln!("pacing_timeouts {}", line.pacing_timeouts);
     hprintln!("rx_overruns {}", line.rx_overruns);
+    hprintln!("stack_high_water {}", stack_high_water);
+    hprintln!("firmware_state_bytes {}", core::mem::size_of::<Firmware>());
+    hprintln!("link_state_bytes {}", core::mem::size_of::<Line>());
     // Commands still arriving (the acknowledgement of the last packet is
     // already in) are counted too.
-    line.wait_for(LINGER_MS * CLOCK_HZ / 1000, |_| false);
+    line.wait_for(LINGER_MS * CLOCK_HZ / 1000, Until::Timeout);
     let c = line.robot.commands();
     hprintln!("commands_applied {}", c.applied);
     hprintln!("commands_lost {}", c.lost);
