@@ -3,8 +3,14 @@
 //! with each step's telemetry (encoder counts, IR reading) sent as a COBS
 //! frame over UART0 and the host's wheel commands received on it
 //! ([`locus_fw_app::link`]). Run under QEMU's `mps2-an386` with UART0 on a
-//! pseudo-terminal (`cargo run --release --bin locus-fw-link -- -serial
-//! pty`), and `locus host --robot serial:/dev/pts/N` localises it.
+//! pseudo-terminal and without `-icount` (`qemu-system-arm -machine
+//! mps2-an386 -cpu cortex-m4 -display none -monitor none
+//! -semihosting-config enable=on,target=native -serial pty -kernel ELF`;
+//! see `docs/firmware.md`), and `locus host --robot serial:/dev/pts/N`
+//! localises it. (`cargo run --bin locus-fw-link -- -serial pty` works
+//! too, but under its runner's `-icount` the timeouts count instructions,
+//! 64 ns of virtual time each, not the host's time: with no host, the 30 s
+//! handshake ended after 24.5 s of wall time on this VM.)
 //!
 //! # Loop
 //! 1. Wait up to [`HANDSHAKE_S`] for a first valid command (the host sends
