@@ -85,8 +85,8 @@ impl LinkRobot {
     /// Telemetry `sequence` (robot time `sequence * STEP_US`), with the
     /// decoders' 20-bit counts `now` extended ([`extend`](Self::extend))
     /// and the IR reading `ir` (m), framed into `out`; returns the frame's
-    /// length (at most 44 bytes with a reading: 40 of packet, 2 of COBS, 2
-    /// delimiters).
+    /// length (43 bytes: 40 of packet, 1 of COBS overhead, the leading and
+    /// the closing delimiter).
     ///
     /// # Errors
     /// [`locus_link::Error::NonFinite`] for a NaN or infinite reading (the
