@@ -36,6 +36,8 @@ fn the_recorded_runs_telemetry_decodes_to_its_counts_and_readings() {
         let n = robot
             .telemetry_frame(k as u32 + 1, fw.counts(), *ir, &mut frame)
             .unwrap();
+        // 40 bytes of packet, 1 of COBS overhead, 2 delimiters.
+        assert_eq!(n, 43);
         stream.extend_from_slice(&frame[..n]);
     }
     assert_eq!(robot.sent(), square_data::STEPS as u64 + 1);
