@@ -38,7 +38,15 @@ const FLAG_IR: u8 = 1;
 /// The CRC-32 used on every packet (ISO-HDLC: polynomial 0x04C11DB7,
 /// reflected, init and xor-out 0xFFFFFFFF; check value of `"123456789"` is
 /// 0xCBF43926).
+///
+/// With the `small-crc` feature it is computed bit by bit (no table: 1 KiB
+/// less flash, about eight times the work per byte) for flash-constrained
+/// firmware; the values are the same.
+#[cfg(not(feature = "small-crc"))]
 const CRC: Crc<u32> = Crc::<u32>::new(&CRC_32_ISO_HDLC);
+/// The CRC-32 used on every packet, bitwise (see above).
+#[cfg(feature = "small-crc")]
+const CRC: Crc<u32, crc::NoTable> = Crc::<u32, crc::NoTable>::new(&CRC_32_ISO_HDLC);
 
 /// Robot to host: one sample of the robot's sensors.
 ///
@@ -199,16 +207,19 @@ impl CommandPacket {
         Ok(COMMAND_LEN)
     }
 
-    /// Decodes a command packet (checks in the order of [`decode`]).
+    /// Decodes a command packet (checks in the order of [`decode`]). A
+    /// telemetry packet is [`Error::BadKind`] once its CRC, magic and
+    /// version passed, without checking its body: the robot's decoder then
+    /// carries no telemetry decoding (flash on a microcontroller).
     ///
     /// # Errors
-    /// Any decode error of [`decode`]; [`Error::BadKind`] for telemetry.
+    /// Any decode error of [`decode`] for a command; [`Error::BadKind`] for
+    /// telemetry.
     pub fn decode(bytes: &[u8]) -> Result<Self, Error> {
-        match decode(bytes)? {
-            Packet::Command(c) => Ok(c),
-            Packet::Telemetry(_) => Err(Error::BadKind {
-                kind: KIND_TELEMETRY,
-            }),
+        let (kind, sequence) = check(bytes)?;
+        match kind {
+            KIND_COMMAND => decode_command(bytes, sequence),
+            kind => Err(Error::BadKind { kind }),
         }
     }
 }
@@ -232,13 +243,24 @@ pub enum Packet {
 /// # Errors
 /// As listed above.
 pub fn decode(bytes: &[u8]) -> Result<Packet, Error> {
+    let (kind, sequence) = check(bytes)?;
+    match kind {
+        KIND_TELEMETRY => decode_telemetry(bytes, sequence).map(Packet::Telemetry),
+        KIND_COMMAND => decode_command(bytes, sequence).map(Packet::Command),
+        kind => Err(Error::BadKind { kind }),
+    }
+}
+
+/// The checks every packet passes first: length at least 12, CRC, magic,
+/// version. Returns the kind byte and the sequence number.
+fn check(bytes: &[u8]) -> Result<(u8, u32), Error> {
     let len = bytes.len();
     if len < MIN_LEN {
         return Err(Error::TooShort { len });
     }
     let (body, tail) = bytes.split_at(len - 4);
     let received = u32::from_le_bytes([tail[0], tail[1], tail[2], tail[3]]);
-    let computed = CRC.checksum(body);
+    let computed = crc32(body);
     if received != computed {
         return Err(Error::BadCrc { received, computed });
     }
@@ -248,29 +270,28 @@ pub fn decode(bytes: &[u8]) -> Result<Packet, Error> {
     if body[2] != VERSION {
         return Err(Error::BadVersion { version: body[2] });
     }
-    let sequence = u32_at(body, 4);
-    match body[3] {
-        KIND_TELEMETRY => decode_telemetry(bytes, sequence).map(Packet::Telemetry),
-        KIND_COMMAND => {
-            if len != COMMAND_LEN {
-                return Err(Error::BadLength {
-                    expected: COMMAND_LEN,
-                    len,
-                });
-            }
-            let c = CommandPacket {
-                sequence,
-                ack: u32_at(bytes, 8),
-                right: f32_at(bytes, 12),
-                left: f32_at(bytes, 16),
-            };
-            if c.right.is_finite() && c.left.is_finite() {
-                Ok(Packet::Command(c))
-            } else {
-                Err(Error::NonFinite)
-            }
-        }
-        kind => Err(Error::BadKind { kind }),
+    Ok((body[3], u32_at(body, 4)))
+}
+
+/// The command body of a packet whose CRC, magic, version and kind passed.
+fn decode_command(bytes: &[u8], sequence: u32) -> Result<CommandPacket, Error> {
+    let len = bytes.len();
+    if len != COMMAND_LEN {
+        return Err(Error::BadLength {
+            expected: COMMAND_LEN,
+            len,
+        });
+    }
+    let c = CommandPacket {
+        sequence,
+        ack: u32_at(bytes, 8),
+        right: f32_at(bytes, 12),
+        left: f32_at(bytes, 16),
+    };
+    if c.right.is_finite() && c.left.is_finite() {
+        Ok(c)
+    } else {
+        Err(Error::NonFinite)
     }
 }
 
@@ -319,6 +340,14 @@ fn decode_telemetry(bytes: &[u8], sequence: u32) -> Result<Telemetry, Error> {
     Ok(t)
 }
 
+/// The CRC-32 of `bytes` ([`CRC`]). Out of line with `small-crc`, so that a
+/// firmware that both encodes and decodes carries one copy of the bitwise
+/// loop.
+#[cfg_attr(feature = "small-crc", inline(never))]
+fn crc32(bytes: &[u8]) -> u32 {
+    CRC.checksum(bytes)
+}
+
 /// Writes magic, version, `kind` and `sequence` (bytes 0..8).
 fn header(out: &mut [u8], kind: u8, sequence: u32) {
     out[0..2].copy_from_slice(&MAGIC);
@@ -330,7 +359,7 @@ fn header(out: &mut [u8], kind: u8, sequence: u32) {
 /// Writes the CRC of all but the last four bytes into the last four.
 fn seal(out: &mut [u8]) {
     let n = out.len() - 4;
-    let crc = CRC.checksum(&out[..n]);
+    let crc = crc32(&out[..n]);
     out[n..].copy_from_slice(&crc.to_le_bytes());
 }
 
@@ -375,5 +404,28 @@ mod tests {
         assert_eq!(&buf[12..16], &1.0f32.to_le_bytes());
         assert_eq!(&buf[16..20], &(-1.0f32).to_le_bytes());
         assert_eq!(u32_at(&buf, 20), CRC.checksum(&buf[..20]));
+    }
+
+    #[test]
+    fn the_command_decoder_refuses_telemetry_by_kind_without_reading_its_body() {
+        let mut buf = [0u8; MAX_PACKET];
+        let n = Telemetry::new(7, 70).encode(&mut buf).unwrap();
+        assert_eq!(
+            CommandPacket::decode(&buf[..n]),
+            Err(Error::BadKind {
+                kind: KIND_TELEMETRY
+            })
+        );
+        // A reserved byte set, resealed: `decode` reads the body and says
+        // so; the command decoder stops at the kind.
+        buf[26] = 1;
+        seal(&mut buf[..n]);
+        assert_eq!(decode(&buf[..n]), Err(Error::Reserved));
+        assert_eq!(
+            CommandPacket::decode(&buf[..n]),
+            Err(Error::BadKind {
+                kind: KIND_TELEMETRY
+            })
+        );
     }
 }

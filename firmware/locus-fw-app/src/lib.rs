@@ -41,6 +41,7 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
+pub mod link;
 pub mod square_data;
 
 use locus_core::nalgebra::{Matrix3, Vector3};
@@ -466,6 +467,12 @@ impl Firmware {
         self.odometry_step(&u);
         self.finish_step();
         Ok(())
+    }
+
+    /// The decoders' wrapping 20-bit counts `[right, left]` now (what the
+    /// link robot extends to the link's 32-bit counts).
+    pub fn counts(&self) -> [u32; 2] {
+        [self.right.counter().value(), self.left.counter().value()]
     }
 
     /// The current belief.
