@@ -8,13 +8,11 @@
 //! robot cannot do is refused.
 #![allow(clippy::std_instead_of_core, clippy::std_instead_of_alloc)]
 
-use std::net::UdpSocket;
+mod support;
+
 use std::time::{Duration, Instant};
 
 use futures_util::{SinkExt, StreamExt};
-use locus_serve::robot::{Attached, Link};
-use locus_sim::SquareConfig;
-use locus_sim::link_robot::{RobotConfig, host_config, run_robot};
 use serde_json::{Value, json};
 use tokio_tungstenite::tungstenite::Message;
 
@@ -23,26 +21,6 @@ type Ws =
 
 /// Robot seconds per wall second.
 const TIME_SCALE: f64 = 10.0;
-
-/// A simulated robot on loopback UDP in its own thread (detached: it ends
-/// `idle_exit` robot seconds after the host stops sending); its address.
-pub fn spawn_robot(time_scale: f64) -> std::net::SocketAddr {
-    let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
-    let addr = socket.local_addr().unwrap();
-    let cfg = RobotConfig {
-        square: SquareConfig {
-            max_time: 5000.0,
-            ..SquareConfig::default()
-        },
-        time_scale,
-        // Generous for a loaded machine: the host answers every packet.
-        idle_exit: 30.0,
-        handshake: Duration::from_secs(60),
-        ..RobotConfig::default()
-    };
-    std::thread::spawn(move || run_robot(&socket, &cfg));
-    addr
-}
 
 async fn next_json(ws: &mut Ws) -> Value {
     loop {
@@ -102,18 +80,8 @@ fn mean_nis(samples: &[Value], after: f64) -> (f64, usize) {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_page_drives_a_robot_over_udp() {
-    let robot = spawn_robot(TIME_SCALE);
-    let mut cfg = host_config(&SquareConfig::default());
-    cfg.laps = usize::MAX;
-    let link = Link::udp("127.0.0.1:0".parse().unwrap(), robot).unwrap();
-    let attached = Attached::start(link, &cfg, 0.01, Duration::from_millis(50)).unwrap();
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    tokio::spawn(locus_serve::serve_with_robot(
-        listener,
-        locus_serve::Config::default(),
-        attached,
-    ));
+    let robot = support::spawn_robot(TIME_SCALE);
+    let addr = support::start_robot_server(robot).await;
     let (mut ws, _) = tokio_tungstenite::connect_async(format!("ws://{addr}/ws"))
         .await
         .unwrap();
