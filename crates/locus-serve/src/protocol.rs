@@ -277,9 +277,10 @@ pub enum ServerMsg {
         running: bool,
         /// Whether the run has ended (laps done or time limit).
         finished: bool,
-        /// Simulated time (s).
+        /// Simulated time (s); for a robot, the robot's time of its last
+        /// applied packet.
         time: f64,
-        /// Steps run.
+        /// Steps run; for a robot, telemetry packets applied.
         steps: usize,
         /// Laps done.
         laps: usize,

@@ -481,7 +481,7 @@ impl Publisher {
     /// One call of the live loop: commands, the packet's sample, a frame
     /// when due.
     fn each(&mut self, host: &mut Host, tick: &LiveTick) -> ControlFlow<()> {
-        if tick.host_time == 0.0 && self.last.is_none() {
+        if self.last.is_none() {
             // Before anything is sent: the robot waits for a page's start.
             host.set_stopped(true);
         }
@@ -633,5 +633,75 @@ impl Publisher {
                 clock_drift_ppm: clock.map(|f| f.drift * 1e6),
             }),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn host() -> Host {
+        let mut cfg = locus_sim::link_robot::host_config(&locus_sim::SquareConfig::default());
+        cfg.laps = usize::MAX;
+        Host::new(&cfg).unwrap()
+    }
+
+    fn values(v: &Value) -> Map<String, Value> {
+        v.as_object().unwrap().clone()
+    }
+
+    #[test]
+    fn settings_are_checked_whole_and_applied_to_the_host() {
+        for (v, field) in [
+            (json!({"r11": 1e-3, "ir_sigma": 0.01}), "ir_sigma"),
+            (json!({"r11": 1e-3, "q22": "1e999"}), "q22"),
+            (json!({"gate": 1.5}), "gate"),
+            (json!({"use_ir": "maybe"}), "use_ir"),
+            (json!({"start_x": 0.1}), "start_x"),
+        ] {
+            assert_eq!(
+                Settings::parse(&values(&v)).unwrap_err().field,
+                field,
+                "{v}"
+            );
+        }
+        let mut h = host();
+        let before = *h.config();
+        let s = Settings::parse(&values(
+            &json!({"r22": "4e-4", "gate": 0, "use_ir": false, "k_pos": 2}),
+        ))
+        .unwrap();
+        s.apply(&mut h).unwrap();
+        let c = h.config();
+        assert_eq!(c.localiser.r22, 4e-4);
+        assert_eq!(
+            c.localiser.r11, before.localiser.r11,
+            "fields not given are kept"
+        );
+        assert_eq!(c.localiser.gate_confidence, None, "gate 0: no gate");
+        assert!(!c.use_ir);
+        assert_eq!(c.control.k_pos, 2.0);
+        assert_eq!(c.control.v_ref, before.control.v_ref);
+    }
+
+    #[test]
+    fn what_a_live_robot_cannot_do_is_refused_by_name() {
+        for kind in UNAVAILABLE {
+            let text = match kind {
+                "speed" => json!({"type": kind, "factor": 2}),
+                "scenario" => json!({"type": kind, "name": "square"}),
+                "preset" => json!({"type": kind, "step": "a"}),
+                "initial" => json!({"type": kind, "values": {}}),
+                _ => json!({"type": kind}),
+            };
+            let msg: ClientMsg = serde_json::from_value(text).unwrap();
+            let e = command(msg).unwrap_err();
+            assert_eq!(e.field, kind);
+            assert!(e.reason.contains("not available when attached to a robot"));
+        }
+        let msg: ClientMsg =
+            serde_json::from_value(json!({"type": "teleop", "v": 0.1, "w": -1})).unwrap();
+        assert_eq!(command(msg), Ok(Command::Teleop { v: 0.1, w: -1.0 }));
     }
 }
