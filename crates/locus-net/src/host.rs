@@ -36,11 +36,12 @@
 //!    receiving and counting until the robot has been quiet for `quiet`.
 
 use core::net::SocketAddr;
+use core::ops::ControlFlow;
 use core::time::Duration;
 use std::net::UdpSocket;
 use std::time::Instant;
 
-use locus_control::{Controller, FollowPath, wheel_speeds};
+use locus_control::{Controller, FollowPath, Twist, wheel_speeds};
 use locus_link::clock::ClockFit;
 use locus_link::framing::FrameCounters;
 use locus_link::receiver::{MAX_JUMP, RESYNC_AFTER};
@@ -122,20 +123,7 @@ impl HostConfig {
                 l.counter_bits == COUNTER_BITS,
                 "localiser.counter_bits must be 32 (the link's counts)",
             ),
-            (
-                [
-                    c.v_ref,
-                    c.w_ref,
-                    c.k_cross,
-                    c.k_heading,
-                    c.k_pos,
-                    c.pos_tol,
-                    c.heading_tol,
-                ]
-                .into_iter()
-                .all(pos),
-                "control values must be finite and > 0",
-            ),
+            (control_ok(c), "control values must be finite and > 0"),
             (
                 pos(self.clock_bucket),
                 "clock_bucket must be finite and > 0 s",
@@ -145,10 +133,31 @@ impl HostConfig {
             return Err(Error::Config(what));
         }
         self.limits.validate()?;
-        l.validate().map_err(|e| match e {
-            locus_core::Error::InvalidParameter(what) => Error::Config(what),
-            _ => Error::Config("invalid localiser configuration"),
-        })
+        l.validate().map_err(localiser_error)
+    }
+}
+
+/// Whether every controller value is finite and positive (what the path
+/// controller divides by and saturates with).
+fn control_ok(c: &locus_control::Config) -> bool {
+    [
+        c.v_ref,
+        c.w_ref,
+        c.k_cross,
+        c.k_heading,
+        c.k_pos,
+        c.pos_tol,
+        c.heading_tol,
+    ]
+    .into_iter()
+    .all(|v| v.is_finite() && v > 0.0)
+}
+
+/// A refused localiser configuration as the host's [`Error::Config`].
+fn localiser_error(e: locus_core::Error) -> Error {
+    match e {
+        locus_core::Error::InvalidParameter(what) => Error::Config(what),
+        _ => Error::Config("invalid localiser configuration"),
     }
 }
 
@@ -169,9 +178,32 @@ pub struct HostStep {
     pub ir: Option<[f32; 2]>,
     /// Whether an IR correction was applied (associated and gated in).
     pub corrected: bool,
+    /// NIS of the IR correction tried on this packet (applied or gated
+    /// out), if a reading was associated with a wall.
+    pub nis: Option<f64>,
+    /// Its innovation `[m, rad]` (wall distance, wall angle).
+    pub innovation: Option<[f64; 2]>,
     /// Wheel speeds sent `[right, left]` (m/s); `None` once the path is
     /// done.
     pub command: Option<[f32; 2]>,
+}
+
+/// Who chooses the wheel speeds a [`Host`] sends.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Drive {
+    /// The path controller (the default).
+    Path,
+    /// Nobody: zero wheel speeds (the robot stays connected and localised).
+    Stopped,
+    /// A body twist from an operator (keyboard), clamped to the
+    /// controller's `v_ref` and `w_ref`, until the host time `until` (s,
+    /// the clock of [`Host::receive`]); then back to what drove before.
+    Teleop {
+        /// The twist (`done` is false).
+        twist: Twist,
+        /// Host time after which it lapses (s).
+        until: f64,
+    },
 }
 
 /// What one datagram did to the host.
@@ -232,6 +264,10 @@ pub struct Host {
     resync: u64,
     laps: usize,
     done: bool,
+    /// Whether the path controller is paused (zero speeds sent).
+    stopped: bool,
+    /// The operator's twist and the host time it lapses at.
+    teleop: Option<(Twist, f64)>,
     corrections: u64,
     filter_errors: u64,
     estimates: Vec<(u32, [f64; 3])>,
@@ -255,6 +291,8 @@ impl Host {
             resync: 0,
             laps: 0,
             done: false,
+            stopped: false,
+            teleop: None,
             corrections: 0,
             filter_errors: 0,
             estimates: Vec::new(),
@@ -284,6 +322,136 @@ impl Host {
         self.done
     }
 
+    /// The configuration in use (with the values of the setters below).
+    pub fn config(&self) -> &HostConfig {
+        &self.cfg
+    }
+
+    /// The clock estimator's fit now (`robot = offset + (1 + drift) host`),
+    /// `None` before it has two buckets.
+    pub fn clock(&self) -> Option<ClockFit> {
+        self.clock.estimate()
+    }
+
+    /// IR corrections applied so far.
+    pub fn corrections(&self) -> u64 {
+        self.corrections
+    }
+
+    /// Laps of the path completed.
+    pub fn laps(&self) -> usize {
+        self.laps
+    }
+
+    /// The filter's process noise `Q11` (m^2 per step), `Q22` (rad^2 per
+    /// step) and the IR pair's measurement noise `R11`, `R22` (m^2), from
+    /// the next packet on. The belief is kept: only the next predictions
+    /// and corrections use the new values.
+    ///
+    /// # Errors
+    /// [`Error::Config`] if a value is not finite and > 0; nothing changes.
+    pub fn set_noise(&mut self, q11: f64, q22: f64, r11: f64, r22: f64) -> Result<(), Error> {
+        self.retune(LocaliserConfig {
+            q11,
+            q22,
+            r11,
+            r22,
+            ..self.cfg.localiser
+        })
+    }
+
+    /// The chi-square gate of the IR corrections: its confidence in
+    /// (0, 1), or `None` for no gate; from the next packet on.
+    ///
+    /// # Errors
+    /// [`Error::Config`] if the confidence is outside (0, 1); nothing
+    /// changes.
+    pub fn set_gate(&mut self, confidence: Option<f64>) -> Result<(), Error> {
+        self.retune(LocaliserConfig {
+            gate_confidence: confidence,
+            ..self.cfg.localiser
+        })
+    }
+
+    /// Whether the filter uses the IR readings (`false`: odometry only),
+    /// from the next packet on.
+    pub fn set_use_ir(&mut self, on: bool) {
+        self.cfg.use_ir = on;
+    }
+
+    /// The path controller's parameters (reference speeds, gains,
+    /// tolerances), from the next command on; the controller keeps its
+    /// place on the path.
+    ///
+    /// # Errors
+    /// [`Error::Config`] if a value is not finite and > 0; nothing
+    /// changes.
+    pub fn set_control(&mut self, control: locus_control::Config) -> Result<(), Error> {
+        if !control_ok(&control) {
+            return Err(Error::Config("control values must be finite and > 0"));
+        }
+        self.controller.set_config(control);
+        self.cfg.control = control;
+        Ok(())
+    }
+
+    /// Pauses (`true`: zero wheel speeds from the next command on; the
+    /// link stays up and the filter keeps running) or resumes the path
+    /// controller from where the estimate is.
+    pub fn set_stopped(&mut self, stopped: bool) {
+        self.stopped = stopped;
+    }
+
+    /// An operator's body twist `v` (m/s), `w` (rad/s), clamped to the
+    /// controller's `v_ref` and `w_ref`, sent as wheel speeds instead of
+    /// the controller's until host time `until` (s, the clock of
+    /// [`Host::receive`]): an operator that goes away (a lost key-up)
+    /// stops steering at `until`. Repeating the call extends it.
+    ///
+    /// # Errors
+    /// [`Error::Config`] if `v`, `w` or `until` is not finite; nothing
+    /// changes.
+    pub fn set_teleop(&mut self, v: f64, w: f64, until: f64) -> Result<(), Error> {
+        if !(v.is_finite() && w.is_finite() && until.is_finite()) {
+            return Err(Error::Config("teleoperation v, w and until must be finite"));
+        }
+        let c = &self.cfg.control;
+        let twist = Twist {
+            v: v.clamp(-c.v_ref, c.v_ref),
+            w: w.clamp(-c.w_ref, c.w_ref),
+            done: false,
+        };
+        self.teleop = Some((twist, until));
+        Ok(())
+    }
+
+    /// Ends the operator's twist now: back to the controller (or zero
+    /// speeds if stopped).
+    pub fn clear_teleop(&mut self) {
+        self.teleop = None;
+    }
+
+    /// Who chooses the next command at host time `host_time` (s).
+    pub fn drive(&self, host_time: f64) -> Drive {
+        match self.teleop {
+            Some((twist, until)) if host_time <= until => Drive::Teleop { twist, until },
+            _ if self.stopped => Drive::Stopped,
+            _ => Drive::Path,
+        }
+    }
+
+    /// Applies a changed localiser configuration to the running filter:
+    /// its rules (gate), drive model (`Q`) and association (`R`); the
+    /// belief, odometer reference and NIS monitor are kept.
+    fn retune(&mut self, l: LocaliserConfig<f64>) -> Result<(), Error> {
+        let fresh = l.localiser().map_err(localiser_error)?;
+        self.localiser.filter.set_rules(*fresh.filter.rules());
+        self.localiser.model = fresh.model;
+        self.localiser.ir = fresh.ir;
+        self.cfg.localiser = l;
+        Ok(())
+    }
+
     /// One datagram from the robot, received at `host_time` (s since the
     /// run began). Work per call is bounded: at most `MAX_JUMP + 1`
     /// predictions.
@@ -311,23 +479,23 @@ impl Host {
         };
         let robot_time = t.timestamp_us as f64 * 1e-6;
         self.clock.push(robot_time, host_time);
-        let corrected = match t.ir.filter(|_| predicted && self.cfg.use_ir) {
+        let (corrected, tried) = match t.ir.filter(|_| predicted && self.cfg.use_ir) {
             Some([ds1, ds2]) => match self
                 .localiser
                 .ir(&self.cfg.walls, [f64::from(ds1), f64::from(ds2)])
             {
-                Ok(outcome) => outcome.applied(),
+                Ok(outcome) => (outcome.applied(), tried_correction(&outcome)),
                 Err(_) => {
                     self.filter_errors += 1;
-                    false
+                    (false, None)
                 }
             },
-            None => false,
+            None => (false, None),
         };
         self.corrections += u64::from(corrected);
         let x = self.localiser.belief().x;
         self.estimates.push((t.sequence, [x[0], x[1], x[2]]));
-        let command = self.command([x[0], x[1], x[2]]);
+        let command = self.command([x[0], x[1], x[2]], host_time);
         let p = self.localiser.belief().p;
         Outcome::Applied(HostStep {
             sequence: t.sequence,
@@ -340,6 +508,8 @@ impl Host {
             variance: [p[(0, 0)], p[(1, 1)], p[(2, 2)]],
             ir: t.ir,
             corrected,
+            nis: tried.map(|(nis, _)| nis),
+            innovation: tried.map(|(_, y)| y),
             command,
         })
     }
@@ -410,12 +580,27 @@ impl Host {
             .check(elapsed, packets, travel, odometer.wheel().quantum(), t.ir)
     }
 
-    /// The path controller's wheel speeds `[right, left]` (m/s) for the
-    /// estimate, or `None` once the laps are done.
+    /// The wheel speeds `[right, left]` (m/s) for the estimate at host
+    /// time `host_time`: the operator's twist while it lasts, zero when
+    /// stopped, else the path controller's; `None` once the laps are done.
     #[allow(clippy::cast_possible_truncation)]
-    fn command(&mut self, [x, y, theta]: [f64; 3]) -> Option<[f32; 2]> {
+    fn command(&mut self, [x, y, theta]: [f64; 3], host_time: f64) -> Option<[f32; 2]> {
         if self.done {
             return None;
+        }
+        let speeds = |twist: Twist, b: f64| {
+            let (v1, v2) = wheel_speeds(twist, b);
+            [v1 as f32, v2 as f32]
+        };
+        match self.drive(host_time) {
+            Drive::Teleop { twist, .. } => {
+                return Some(speeds(twist, self.cfg.localiser.wheelbase));
+            }
+            Drive::Stopped => {
+                self.teleop = None;
+                return Some([0.0, 0.0]);
+            }
+            Drive::Path => self.teleop = None,
         }
         let est = locus_control::Pose::new(x, y, theta);
         let mut twist = self.controller.command(est);
@@ -428,8 +613,23 @@ impl Host {
             self.controller.reset();
             twist = self.controller.command(est);
         }
-        let (v1, v2) = wheel_speeds(twist, self.cfg.localiser.wheelbase);
-        Some([v1 as f32, v2 as f32])
+        Some(speeds(twist, self.cfg.localiser.wheelbase))
+    }
+}
+
+/// The NIS and innovation of the correction an IR outcome tried (applied
+/// or gated out), if the reading was associated.
+fn tried_correction(outcome: &locus_models::IrOutcome<f64>) -> Option<(f64, [f64; 2])> {
+    use locus_core::Update;
+    match outcome {
+        locus_models::IrOutcome::Associated {
+            update: Update::Applied { correction, .. } | Update::Gated { correction, .. },
+            ..
+        } => Some((
+            correction.nis,
+            [correction.innovation[0], correction.innovation[1]],
+        )),
+        _ => None,
     }
 }
 
@@ -553,6 +753,107 @@ pub fn run_host_over(
         latency,
         estimates: host.estimates,
     })
+}
+
+/// What [`run_host_live`] tells its caller each time round its loop.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LiveTick {
+    /// Host time now (s since the loop began; the clock of
+    /// [`Host::receive`] and [`Host::set_teleop`]).
+    pub host_time: f64,
+    /// The packet applied since the previous call, if one was.
+    pub step: Option<HostStep>,
+    /// Wall time from that packet's reception to its command's send (s).
+    pub latency: Option<f64>,
+    /// Commands sent so far (zero-speed hellos included).
+    pub commands_sent: u64,
+    /// What the transport dropped before packets were formed (COBS frames
+    /// on a byte stream; zero on UDP).
+    pub framing: FrameCounters,
+    /// Whether no packet has been applied for `quiet` (or none yet): the
+    /// host is sending zero-speed hellos every `resend` until the robot
+    /// answers again.
+    pub silent: bool,
+}
+
+/// Runs the host over `link` for as long as `each` says
+/// ([`ControlFlow::Continue`]), for a live session (`locus serve --robot`)
+/// rather than a run of laps: no handshake timeout and no quiet end; while
+/// the robot is silent (at the start, or for `quiet` after its last
+/// applied packet: a robot that restarted) the host sends a zero-speed
+/// hello every `resend`.
+///
+/// `each` is called once before anything is sent (to configure the host:
+/// [`Host::set_stopped`] and the other setters), after every applied
+/// packet (whose command has then been sent), and at least every `poll`
+/// otherwise; what it sets takes effect from the next packet. It runs on
+/// the loop's thread, between packets, so it must not block.
+///
+/// # Errors
+/// Link errors (the socket or serial device failed) and an invalid
+/// configuration.
+pub fn run_host_live(
+    link: &mut impl Transport,
+    cfg: &HostConfig,
+    poll: Duration,
+    mut each: impl FnMut(&mut Host, &LiveTick) -> ControlFlow<()>,
+) -> Result<(), Error> {
+    let mut host = Host::new(cfg)?;
+    let mut buf = [0u8; 2048];
+    let mut commands = Commands::default();
+    let mut commands_sent = 0u64;
+    let origin = Instant::now();
+    let mut tick = LiveTick {
+        host_time: 0.0,
+        step: None,
+        latency: None,
+        commands_sent,
+        framing: link.framing(),
+        silent: true,
+    };
+    if each(&mut host, &tick).is_break() {
+        return Ok(());
+    }
+    let mut next_hello = origin;
+    let mut last_applied: Option<Instant> = None;
+    loop {
+        let now = Instant::now();
+        let silent = last_applied.is_none_or(|t| now.duration_since(t) >= cfg.quiet);
+        if silent && now >= next_hello {
+            commands.send(link, NO_ACK, [0.0, 0.0])?;
+            commands_sent += 1;
+            next_hello = now + cfg.resend;
+        }
+        let wait = if silent {
+            next_hello.saturating_duration_since(now).min(poll)
+        } else {
+            poll
+        };
+        tick.step = None;
+        tick.latency = None;
+        if let Some(n) = link.recv(&mut buf, at_least_1us(wait))? {
+            let received = Instant::now();
+            if let Outcome::Applied(step) =
+                host.receive(&buf[..n], (received - origin).as_secs_f64())
+            {
+                last_applied = Some(received);
+                if let Some(speeds) = step.command {
+                    commands.send(link, step.sequence, speeds)?;
+                    commands_sent += 1;
+                    tick.latency = Some(received.elapsed().as_secs_f64());
+                }
+                tick.step = Some(step);
+            }
+        }
+        let now = Instant::now();
+        tick.host_time = (now - origin).as_secs_f64();
+        tick.commands_sent = commands_sent;
+        tick.framing = link.framing();
+        tick.silent = last_applied.is_none_or(|t| now.duration_since(t) >= cfg.quiet);
+        if each(&mut host, &tick).is_break() {
+            return Ok(());
+        }
+    }
 }
 
 /// The host's outgoing command packets, numbered from 0.

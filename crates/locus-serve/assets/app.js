@@ -11,6 +11,8 @@ const locus = {
   connected: false, hello: null, params: null, state: null, frames: 0,
   samples: 0, teleopFrames: 0, errors: [], lastCsv: null, ellipse: null,
   lastCorrection: null, charts: {},
+  // Attached to a robot (hello.robot), else null; the link's health.
+  robot: null, link: null,
   // Every NIS received since the page loaded, with its time: {t, nis}.
   nisLog: [],
 };
@@ -152,7 +154,7 @@ function drawArena() {
   ctx.strokeStyle = '#1b2a41'; ctx.lineWidth = 4;
   for (const [[ax, ay], [bx, by]] of h.walls) { ctx.beginPath(); ctx.moveTo(sx(ax), sy(ay)); ctx.lineTo(sx(bx), sy(by)); ctx.stroke(); }
   if ($('show-odo').checked) drawPath(ctx, buf.odo, '#9aa7b4', 1.5);
-  drawPath(ctx, buf.truth, '#1b7f3a', 2);
+  if (buf.truth.length) drawPath(ctx, buf.truth, '#1b7f3a', 2);
   drawPath(ctx, buf.est, '#0b6e99', 2);
   const s = locus.state, last = locus.lastSample;
   if (!last) return;
@@ -164,7 +166,7 @@ function drawArena() {
     ctx.setLineDash([]);
     if (b.hit) { ctx.fillStyle = '#d62728'; ctx.beginPath(); ctx.arc(sx(b.to[0]), sy(b.to[1]), 3, 0, 2 * Math.PI); ctx.fill(); }
   }
-  drawRobot(ctx, last.truth, '#1b7f3a', true);
+  if (last.truth) drawRobot(ctx, last.truth, '#1b7f3a', true);
   drawRobot(ctx, last.ekf, '#0b6e99', false);
   const e = ellipse(last.p[0], last.p[3], last.p[1], ellipseProb());
   const mag = ellipseMag();
@@ -241,6 +243,8 @@ function buildForm(formId, fields) {
       `<label for="p-${f}">${label}</label><div class="cell"><input id="p-${f}" class="num" data-field="${f}">` +
       `<span class="inuse" id="inuse-${f}"></span><span class="err" id="err-${f}" hidden></span></div>`);
   }
+  const ir = form.querySelector('#p-ir_sigma');
+  if (ir) { ir.parentElement.classList.add('sim-only'); form.querySelector('label[for="p-ir_sigma"]').classList.add('sim-only'); }
   if (formId === 'params') {
     form.insertAdjacentHTML('beforeend', '<label for="p-use_ir">filter uses the IR</label><div class="cell"><input type="checkbox" id="p-use_ir"><span class="err" id="err-use_ir" hidden></span></div>');
   }
@@ -279,18 +283,29 @@ const handlers = {
       const el = $('p-' + l.field);
       if (el) el.title = `${l.min} … ${l.max} ${l.unit}`;
     }
+    locus.robot = m.robot || null;
+    document.body.classList.toggle('robot', !!m.robot);
+    $('robot-panel').hidden = !m.robot;
+    if (m.robot) {
+      document.title = `Locus: attached to the robot (${m.robot.link})`;
+      $('robot-link').textContent = m.robot.link;
+      // What a live robot cannot do is off (docs/ui.md).
+      for (const id of ['step', 'step-correction', 'reset', 'export', 'speed', 'apply-initial', 'scenario']) $(id).disabled = true;
+      document.querySelector('footer').textContent = 'The filter (locus-core\'s EKF) runs in the host on the server, on the packets of the robot over the link; this page draws what it sends. Charts: uPlot.';
+    }
     clearBuffers(); drawArena();
   },
   params(m) {
     locus.params = m;
     const v = m.values;
     for (const [f] of LIVE.concat(INITIAL)) {
+      if (v[f] === null || v[f] === undefined) continue; // not for a robot
       const input = $('p-' + f);
       $('inuse-' + f).textContent = 'in use: ' + v[f];
       if (!input.classList.contains('invalid') && document.activeElement !== input) input.value = v[f];
     }
     $('p-use_ir').checked = v.use_ir;
-    if (!$('speed').classList.contains('invalid') && document.activeElement !== $('speed')) $('speed').value = v.speed;
+    if (v.speed !== null && !$('speed').classList.contains('invalid') && document.activeElement !== $('speed')) $('speed').value = v.speed;
     document.querySelectorAll('#presets button').forEach((b) => b.classList.toggle('active', b.id === 'preset-' + m.preset));
     if (!m.preset) $('figure').textContent = 'No guide step loaded (values set by hand).';
     else {
@@ -311,7 +326,9 @@ const handlers = {
       push('nis', s.nis); push('gate', gate);
       push('v1', s.wheels[0]); push('v2', s.wheels[1]);
       push('s1', s.ir ? s.ir[0] : null); push('s2', s.ir ? s.ir[1] : null);
-      push('truth', s.truth, PATH_MAX); push('est', s.ekf, PATH_MAX); push('odo', s.odo, PATH_MAX);
+      if (s.truth) push('truth', s.truth, PATH_MAX);
+      push('est', s.ekf, PATH_MAX);
+      if (s.odo) push('odo', s.odo, PATH_MAX);
       locus.lastSample = s; locus.samples++;
       if (s.nis !== null) { locus.nisLog.push({ t: s.t, nis: s.nis }); if (locus.nisLog.length > 20000) locus.nisLog.shift(); }
     }
@@ -320,8 +337,11 @@ const handlers = {
       const f = m.figure, cls = f.ok === null ? 'wait' : f.ok ? 'ok' : 'fail';
       $('figure-live').innerHTML = `${f.measured} <span class="verdict ${cls}">${f.ok === null ? '(pending)' : f.ok ? '✓ meets it' : '✗ not met'}</span>`;
     }
-    const mode = m.failure ? `FAILED: ${m.failure}` : m.finished ? 'finished' : m.running ? 'running' : 'paused';
-    $('status').textContent = `${mode} · t = ${m.time.toFixed(2)} s · step ${m.steps} · laps ${m.laps}` + (m.teleop ? ' · keyboard' : '');
+    if (m.link) showLink(m);
+    else {
+      const mode = m.failure ? `FAILED: ${m.failure}` : m.finished ? 'finished' : m.running ? 'running' : 'paused';
+      $('status').textContent = `${mode} · t = ${m.time.toFixed(2)} s · step ${m.steps} · laps ${m.laps}` + (m.teleop ? ' · keyboard' : '');
+    }
     scheduleDraw();
   },
   error(m) { showError(m.field, m.message); },
@@ -335,6 +355,30 @@ const handlers = {
     setTimeout(() => URL.revokeObjectURL(a.href), 10000);
   },
 };
+
+// The link's health while attached to a robot: the host's counters,
+// latency and clock (docs/protocol.md defines each counter).
+const LINK_ROWS = [
+  ['applied', 'packets applied'], ['lost', 'lost'], ['duplicate', 'duplicate'], ['late', 'late'],
+  ['corrupt', 'corrupt (CRC)'], ['malformed', 'malformed'], ['suspect', 'suspect (sequence)'],
+  ['implausible', 'implausible (content)'], ['resync', 'resynchronisations'],
+  ['frames_malformed', 'serial frames dropped: malformed'], ['frames_oversize', 'serial frames dropped: oversize'],
+  ['filter_errors', 'filter errors (belief kept)'], ['corrections', 'IR corrections applied'], ['commands_sent', 'commands sent'],
+];
+function showLink(m) {
+  const l = m.link;
+  locus.link = l;
+  const us = (v) => (v === null ? '—' : `${v.toFixed(1)} µs`);
+  const rows = LINK_ROWS.map(([k, label]) => [label, `<span id="link-${k}">${l[k]}</span>`]);
+  rows.push(['receive → command latency, median / max (last 1000)', `<span id="link-latency">${us(l.latency_p50_us)} / ${us(l.latency_max_us)}</span>`]);
+  rows.push(['robot clock offset / drift', `<span id="link-clock">${l.clock_offset_s === null ? '—' : `${l.clock_offset_s.toFixed(6)} s / ${l.clock_drift_ppm.toFixed(1)} ppm`}</span>`]);
+  $('link-table').innerHTML = rows.map(([k, v]) => `<tr><td>${k}</td><td class="m">${v}</td></tr>`).join('');
+  const last = locus.nisLog.slice(-50);
+  $('nis-mean').textContent = last.length ? (last.reduce((a, e) => a + e.nis, 0) / last.length).toPrecision(3) : '—';
+  const drive = { path: 'path controller driving', stopped: 'stopped (zero wheel speeds)', keyboard: 'keyboard driving' }[l.drive];
+  const mode = m.failure ? `FAILED: ${m.failure}` : l.silent ? 'waiting for the robot (sending hellos)' : drive;
+  $('status').textContent = `${mode} · robot time ${m.time.toFixed(2)} s · packets applied ${m.steps} · no ground truth`;
+}
 
 let drawPending = false;
 function scheduleDraw() {
@@ -355,6 +399,7 @@ function wire() {
   $('apply-params').onclick = () => {
     clearErrors();
     const values = collect(LIVE); values.use_ir = $('p-use_ir').checked;
+    if (locus.robot) delete values.ir_sigma; // the robot's IR noise is its own
     send({ type: 'params', values });
   };
   $('apply-initial').onclick = () => { clearErrors(); send({ type: 'initial', values: collect(INITIAL) }); send({ type: 'reset' }); };

@@ -9,6 +9,13 @@
 //! factor, with a `state` frame every tick ([`Config::tick`]) and commands
 //! back from the page ([`protocol`]).
 //!
+//! [`app_with_robot`] attaches the page to a robot instead
+//! ([`robot::Attached`]: one host session over UDP or a serial line, on
+//! its own thread, shared by every page): the same arena, estimate,
+//! ellipse, plots and NIS, plus the link's health; what a live robot
+//! cannot do (step-through, reset, speed factor, presets, export) is
+//! refused, and nothing that needs ground truth is shown.
+//!
 //! # Safety of the server
 //! - [`serve`] binds what it is given; the binary binds `127.0.0.1` unless
 //!   told otherwise.
@@ -28,6 +35,7 @@ extern crate alloc;
 pub mod params;
 pub mod presets;
 pub mod protocol;
+pub mod robot;
 pub mod session;
 
 use alloc::sync::Arc;
@@ -63,6 +71,10 @@ pub enum Error {
     /// Binding or serving failed.
     #[error("server: {0}")]
     Io(#[from] std::io::Error),
+    /// The robot's link could not be opened or its host configuration is
+    /// invalid.
+    #[error("robot link: {0}")]
+    Link(#[from] locus_net::Error),
 }
 
 /// Bounds on what clients may ask of the server.
@@ -146,6 +158,8 @@ struct Shared {
     config: Config,
     sessions: AtomicUsize,
     next_id: AtomicU64,
+    /// The robot every page is attached to, if any.
+    robot: Option<robot::Attached>,
 }
 
 /// Counts a session for as long as it lives.
@@ -193,10 +207,22 @@ const INDEX: &str = include_str!("../assets/index.html");
 /// WebSocket and `/api/health`. Serve it with [`serve`] or drive it with
 /// `tower::ServiceExt::oneshot` in tests.
 pub fn app(config: Config) -> Router {
+    router(config, None)
+}
+
+/// The router of the teaching UI attached to `robot`: every page drives
+/// and watches that one host session instead of a simulation of its own
+/// (`config` gives the limits and the tick; its scenario is not run).
+pub fn app_with_robot(config: Config, robot: robot::Attached) -> Router {
+    router(config, Some(robot))
+}
+
+fn router(config: Config, robot: Option<robot::Attached>) -> Router {
     let shared = Arc::new(Shared {
         config,
         sessions: AtomicUsize::new(0),
         next_id: AtomicU64::new(1),
+        robot,
     });
     Router::new()
         .route("/", get(index))
@@ -214,6 +240,23 @@ pub async fn serve(listener: tokio::net::TcpListener, config: Config) -> Result<
     axum::serve(
         listener,
         app(config).into_make_service_with_connect_info::<SocketAddr>(),
+    )
+    .await?;
+    Ok(())
+}
+
+/// Serves [`app_with_robot`] on `listener` until the process ends.
+///
+/// # Errors
+/// [`Error::Io`] if serving fails.
+pub async fn serve_with_robot(
+    listener: tokio::net::TcpListener,
+    config: Config,
+    robot: robot::Attached,
+) -> Result<(), Error> {
+    axum::serve(
+        listener,
+        app_with_robot(config, robot).into_make_service_with_connect_info::<SocketAddr>(),
     )
     .await?;
     Ok(())
@@ -369,7 +412,84 @@ impl Bucket {
     }
 }
 
+/// Tells the client it is too fast, at most once a second; `false` if
+/// the client has gone.
+async fn too_fast(
+    socket: &mut WebSocket,
+    bucket: &mut Bucket,
+    limits: &Limits,
+    now: Instant,
+) -> bool {
+    if bucket
+        .warned
+        .is_none_or(|w| now.duration_since(w) >= Duration::from_secs(1))
+    {
+        bucket.warned = Some(now);
+        let e = ServerMsg::Error {
+            field: "message".into(),
+            message: format!(
+                "too many messages (over {} per second): dropped",
+                limits.messages_per_second
+            ),
+        };
+        return send(socket, &e).await;
+    }
+    true
+}
+
+/// A page attached to the robot: its messages go to the host thread (after
+/// the same size and rate limits), the host's frames come back.
+async fn run_robot_page(mut socket: WebSocket, shared: &Shared, robot: &robot::Attached) {
+    let limits = shared.config.limits;
+    let id = shared.next_id.fetch_add(1, Ordering::SeqCst);
+    let (first, mut frames) = robot.connect(id, &limits);
+    for m in &first {
+        if !send(&mut socket, m).await {
+            return;
+        }
+    }
+    let mut bucket = Bucket::new(limits.messages_per_second, limits.burst);
+    loop {
+        tokio::select! {
+            msg = socket.recv() => {
+                let Some(Ok(msg)) = msg else { break };
+                let now = Instant::now();
+                let text = match msg {
+                    Message::Text(t) => t,
+                    Message::Binary(_) => {
+                        let e = ServerMsg::Error {
+                            field: "message".into(),
+                            message: "binary messages are not accepted; send JSON text".into(),
+                        };
+                        if !send(&mut socket, &e).await { break }
+                        continue;
+                    }
+                    Message::Close(_) => break,
+                    Message::Ping(_) | Message::Pong(_) => continue,
+                };
+                if !bucket.take(now) {
+                    if !too_fast(&mut socket, &mut bucket, &limits, now).await { break }
+                    continue;
+                }
+                for out in robot.handle_text(text.as_str()) {
+                    if !send(&mut socket, &out).await { return }
+                }
+            }
+            frame = frames.recv() => match frame {
+                Ok(m) => if !send(&mut socket, &m).await { break },
+                // A slow page skips frames (their samples are lost to it).
+                Err(tokio::sync::broadcast::error::RecvError::Lagged(_)) => {}
+                Err(tokio::sync::broadcast::error::RecvError::Closed) => break,
+            },
+        }
+    }
+}
+
 async fn run_session(mut socket: WebSocket, shared: &Shared) {
+    if let Some(robot) = &shared.robot {
+        run_robot_page(socket, shared, robot).await;
+        return;
+    }
     let cfg = &shared.config;
     let id = shared.next_id.fetch_add(1, Ordering::SeqCst);
     let Ok(mut session) = Session::new(id, &cfg.scenario_name, &cfg.scenario, cfg.seed, cfg.limits)
@@ -405,18 +525,7 @@ async fn run_session(mut socket: WebSocket, shared: &Shared) {
                     Message::Ping(_) | Message::Pong(_) => continue,
                 };
                 if !bucket.take(now) {
-                    // Tell the client at most once a second.
-                    if bucket.warned.is_none_or(|w| now.duration_since(w) >= Duration::from_secs(1)) {
-                        bucket.warned = Some(now);
-                        let e = ServerMsg::Error {
-                            field: "message".into(),
-                            message: format!(
-                                "too many messages (over {} per second): dropped",
-                                cfg.limits.messages_per_second
-                            ),
-                        };
-                        if !send(&mut socket, &e).await { break }
-                    }
+                    if !too_fast(&mut socket, &mut bucket, &cfg.limits, now).await { break }
                     continue;
                 }
                 for out in session.handle_text(text.as_str(), now) {

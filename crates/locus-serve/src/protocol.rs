@@ -83,14 +83,16 @@ pub enum ClientMsg {
 pub struct Sample {
     /// Simulated time (s).
     pub t: f64,
-    /// True pose `[x, y, theta]`.
-    pub truth: [f64; 3],
+    /// True pose `[x, y, theta]`; `None` (JSON `null`) for a robot on the
+    /// link, which sends no ground truth.
+    pub truth: Option<[f64; 3]>,
     /// EKF estimate `[x, y, theta]`.
     pub ekf: [f64; 3],
     /// `[P_xx, P_yy, P_thth, P_xy]` (m^2, m^2, rad^2, m^2).
     pub p: [f64; 4],
-    /// Odometry-only position `[x, y]`.
-    pub odo: [f64; 2],
+    /// Odometry-only position `[x, y]`; `None` for a robot on the link (the
+    /// host runs no odometry-only filter).
+    pub odo: Option<[f64; 2]>,
     /// Wheel speeds `[V1 (right), V2 (left)]` (m/s).
     pub wheels: [f64; 2],
     /// IR distances `[d_s1, d_s2]` (m) when both were in range.
@@ -101,8 +103,9 @@ pub struct Sample {
     pub nis: Option<f64>,
     /// Whether the correction passed the gate.
     pub applied: bool,
-    /// NEES of the estimate.
-    pub nees: f64,
+    /// NEES of the estimate (needs the truth: `None` for a robot on the
+    /// link; `null` too when P does not factor).
+    pub nees: Option<f64>,
 }
 
 /// A sensor beam in the world frame, from the true pose: origin and end
@@ -129,8 +132,9 @@ pub struct ParamValues {
     pub r11: f64,
     /// `R22` (m^2).
     pub r22: f64,
-    /// Injected IR noise (m).
-    pub ir_sigma: f64,
+    /// Injected IR noise (m); `None` for a robot on the link (its noise is
+    /// its own).
+    pub ir_sigma: Option<f64>,
     /// Whether the filter uses the IR.
     pub use_ir: bool,
     /// Gate confidence (0: no gate).
@@ -157,8 +161,75 @@ pub struct ParamValues {
     pub std_y: f64,
     /// Of the heading (rad).
     pub std_theta: f64,
-    /// Speed factor.
-    pub speed: f64,
+    /// Speed factor; `None` for a robot on the link (it runs in real
+    /// time).
+    pub speed: Option<f64>,
+}
+
+/// What the page is attached to when it drives a robot over the link
+/// (`hello.robot`); absent for the in-process simulation.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RobotInfo {
+    /// The link, e.g. `udp 127.0.0.1:7700` or `serial /dev/rfcomm0 at
+    /// 115200 baud`.
+    pub link: String,
+    /// Whether the robot sends its true pose: always `false` (the link
+    /// carries none), so RMSE, NEES and error figures are not available.
+    pub ground_truth: bool,
+    /// The message types a live robot cannot do (they are answered with an
+    /// `error`): step-through, reset, speed factor, scenario, presets,
+    /// initial values, export.
+    pub unavailable: Vec<&'static str>,
+}
+
+/// The link's health (`state.link`) while attached to a robot: the host's
+/// counters (docs/protocol.md defines each), latency and clock.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LinkHealth {
+    /// No packet applied for the host's `quiet` time (or none yet): the
+    /// host is sending zero-speed hellos until the robot answers.
+    pub silent: bool,
+    /// Who drives: `path` (the controller), `stopped` (zero speeds) or
+    /// `keyboard`.
+    pub drive: &'static str,
+    /// Telemetry packets applied.
+    pub applied: u64,
+    /// Packets never received (sequence gaps).
+    pub lost: u64,
+    /// Packets received twice.
+    pub duplicate: u64,
+    /// Packets older than the newest applied one.
+    pub late: u64,
+    /// Packets with a bad CRC.
+    pub corrupt: u64,
+    /// Packets with a good CRC and an impossible layout.
+    pub malformed: u64,
+    /// Packets whose sequence number jumped too far.
+    pub suspect: u64,
+    /// Packets whose content the plausibility limits refused.
+    pub implausible: u64,
+    /// Times the host followed a robot that restarted.
+    pub resync: u64,
+    /// Serial frames the COBS decoder dropped as malformed (0 on UDP).
+    pub frames_malformed: u64,
+    /// Serial frames dropped as oversize (0 on UDP).
+    pub frames_oversize: u64,
+    /// Filter errors (the belief was kept).
+    pub filter_errors: u64,
+    /// IR corrections applied.
+    pub corrections: u64,
+    /// Commands sent (zero-speed hellos included).
+    pub commands_sent: u64,
+    /// Receive-to-command latency, median over the last 1000 commands
+    /// (us).
+    pub latency_p50_us: Option<f64>,
+    /// Its largest value over the same commands (us).
+    pub latency_max_us: Option<f64>,
+    /// Robot clock offset of the estimator's fit (s): `robot = offset + (1
+    /// + drift) host`.
+    pub clock_offset_s: Option<f64>,
+    /// Its drift (ppm).
+    pub clock_drift_ppm: Option<f64>,
 }
 
 /// A message to the page. (Built, serialised and dropped at once: the
@@ -189,6 +260,9 @@ pub enum ServerMsg {
         max_message_bytes: usize,
         /// The most messages accepted per second (sustained).
         max_messages_per_second: f64,
+        /// The robot the page is attached to; `None`: the in-process
+        /// simulation.
+        robot: Option<RobotInfo>,
     },
     /// The values in use.
     Params {
@@ -203,9 +277,10 @@ pub enum ServerMsg {
         running: bool,
         /// Whether the run has ended (laps done or time limit).
         finished: bool,
-        /// Simulated time (s).
+        /// Simulated time (s); for a robot, the robot's time of its last
+        /// applied packet.
         time: f64,
-        /// Steps run.
+        /// Steps run; for a robot, telemetry packets applied.
         steps: usize,
         /// Laps done.
         laps: usize,
@@ -219,8 +294,12 @@ pub enum ServerMsg {
         correction: Option<CorrectionDetail>,
         /// The preset's criterion on this run.
         figure: Option<LiveFigure>,
-        /// Why the run stopped, if the simulation failed.
+        /// Why the run stopped, if the simulation (or the robot's link)
+        /// failed.
         failure: Option<String>,
+        /// The link's health when attached to a robot; `None` for the
+        /// simulation.
+        link: Option<LinkHealth>,
     },
     /// A refused message or value; nothing of it was applied.
     Error {

@@ -62,16 +62,16 @@ fn sample(r: &StepRecord, wheels: (f64, f64)) -> Sample {
     let p = r.ekf_cov;
     Sample {
         t: r.time,
-        truth: [r.truth.x, r.truth.y, r.truth.theta],
+        truth: Some([r.truth.x, r.truth.y, r.truth.theta]),
         ekf: r.ekf,
         p: [p[0][0], p[1][1], p[2][2], p[0][1]],
-        odo: [r.odometry[0], r.odometry[1]],
+        odo: Some([r.odometry[0], r.odometry[1]]),
         wheels: [wheels.0, wheels.1],
         ir: r.ir.map(|(a, b)| [a, b]),
         innovation: r.innovation,
         nis: r.nis,
         applied: r.applied,
-        nees: r.nees,
+        nees: Some(r.nees),
     }
 }
 
@@ -146,6 +146,7 @@ impl Session {
             limits: params::LIMITS.to_vec(),
             max_message_bytes: self.limits.max_message_bytes,
             max_messages_per_second: self.limits.messages_per_second,
+            robot: None,
         }
     }
 
@@ -160,7 +161,7 @@ impl Session {
                 q22: c.q22,
                 r11: c.r11,
                 r22: c.r22,
-                ir_sigma: c.ir_sigma,
+                ir_sigma: Some(c.ir_sigma),
                 use_ir: c.use_ir,
                 gate: c.gate_confidence.unwrap_or(0.0),
                 v_ref: c.control.v_ref,
@@ -174,7 +175,7 @@ impl Session {
                 std_x: start.initial_std[0],
                 std_y: start.initial_std[1],
                 std_theta: start.initial_std[2],
-                speed: self.speed,
+                speed: Some(self.speed),
             },
             preset: self.preset,
         }
@@ -488,6 +489,7 @@ impl Session {
             correction: self.correction.take(),
             figure,
             failure: self.failure.clone(),
+            link: None,
         }
     }
 

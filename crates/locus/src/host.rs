@@ -40,6 +40,16 @@ pub struct Args {
     verbose: bool,
 }
 
+/// The robot's UDP address from `--robot` (`HOST:PORT` or
+/// `udp:HOST:PORT`; `serial:DEVICE` is handled by the caller).
+pub fn udp_robot(arg: &str) -> anyhow::Result<core::net::SocketAddr> {
+    let text = arg.strip_prefix("udp:").unwrap_or(arg);
+    text.to_socket_addrs()
+        .with_context(|| format!("resolving {text} (--robot: HOST:PORT or serial:DEVICE)"))?
+        .next()
+        .with_context(|| format!("no address for {text}"))
+}
+
 /// Runs `locus host`.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let square = square_config(&args.scenario)?;
@@ -64,12 +74,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             run_host_over(&mut link, &cfg, &mut on_step)?,
         )
     } else {
-        let text = args.robot.strip_prefix("udp:").unwrap_or(&args.robot);
-        let robot = text
-            .to_socket_addrs()
-            .with_context(|| format!("resolving {text} (--robot: HOST:PORT or serial:DEVICE)"))?
-            .next()
-            .with_context(|| format!("no address for {text}"))?;
+        let robot = udp_robot(&args.robot)?;
         let socket =
             UdpSocket::bind(&args.bind).with_context(|| format!("binding UDP {}", args.bind))?;
         (

@@ -25,6 +25,19 @@ pub struct Args {
     /// Most concurrent sessions (browser tabs); more are refused with 503.
     #[arg(long, default_value_t = 64)]
     max_sessions: usize,
+    /// Attach the page to a robot instead of the simulation: a UDP address
+    /// (`HOST:PORT` or `udp:HOST:PORT`) or a serial device
+    /// (`serial:/dev/rfcomm0`), as `locus host --robot`. The host localises
+    /// it with SCENARIO's robot, filter and controller; it starts stopped
+    /// (Start on the page drives the path).
+    #[arg(long, value_name = "ADDR|serial:DEVICE")]
+    robot: Option<String>,
+    /// Local address of the host's UDP socket (with `--robot ADDR`).
+    #[arg(long, default_value = "127.0.0.1:0")]
+    bind: SocketAddr,
+    /// Serial line speed, bits per second (with `--robot serial:DEVICE`).
+    #[arg(long, default_value_t = 115_200)]
+    baud: u32,
 }
 
 /// The square-kind configuration of `arg` (a built-in name or a file).
@@ -54,6 +67,27 @@ pub fn run(args: &Args) -> Result<()> {
     let mut config = locus_serve::Config::new(&name, cfg)?;
     config.seed = args.seed;
     config.limits.max_sessions = args.max_sessions;
+    let robot = match &args.robot {
+        None => None,
+        Some(arg) => {
+            let link = if let Some(device) = arg.strip_prefix("serial:") {
+                locus_serve::robot::Link::serial(device, args.baud)?
+            } else {
+                let robot = crate::host::udp_robot(arg)?;
+                locus_serve::robot::Link::udp(args.bind, robot)
+                    .with_context(|| format!("binding UDP {}", args.bind))?
+            };
+            let mut host = locus_sim::link_robot::host_config(&cfg);
+            // A live session: the path repeats until the page stops it.
+            host.laps = usize::MAX;
+            Some(locus_serve::robot::Attached::start(
+                link,
+                &host,
+                cfg.dt,
+                config.tick,
+            )?)
+        }
+    };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()
@@ -63,17 +97,25 @@ pub fn run(args: &Args) -> Result<()> {
             .await
             .with_context(|| format!("binding {}", args.addr))?;
         let addr = listener.local_addr()?;
-        println!(
-            "Locus teaching UI on http://{addr}/ (scenario {name}, seed {}); Ctrl-C stops it",
-            args.seed
-        );
+        match &args.robot {
+            Some(robot) => println!(
+                "Locus teaching UI on http://{addr}/ attached to the robot at {robot} (its filter and controller from {name}; stopped until Start); Ctrl-C stops it"
+            ),
+            None => println!(
+                "Locus teaching UI on http://{addr}/ (scenario {name}, seed {}); Ctrl-C stops it",
+                args.seed
+            ),
+        }
         if !addr.ip().is_loopback() {
             println!(
                 "warning: listening on {}: reachable from the network",
                 addr.ip()
             );
         }
-        locus_serve::serve(listener, config).await?;
+        match robot {
+            Some(robot) => locus_serve::serve_with_robot(listener, config, robot).await?,
+            None => locus_serve::serve(listener, config).await?,
+        }
         Ok(())
     })
 }

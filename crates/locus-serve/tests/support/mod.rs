@@ -1,5 +1,6 @@
 //! Helpers shared by the socket tests, the load test and the load bench:
-//! an in-process server on 127.0.0.1:0, a raw HTTP GET, the process RSS.
+//! an in-process server on 127.0.0.1:0 (or one attached to a simulated
+//! robot on loopback UDP), a raw HTTP GET, the process RSS.
 #![allow(dead_code, clippy::std_instead_of_core, clippy::std_instead_of_alloc)]
 
 use std::net::SocketAddr;
@@ -7,6 +8,49 @@ use std::net::SocketAddr;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 
 pub mod load;
+
+/// Starts `locus_serve::serve_with_robot`, attached over loopback UDP to
+/// the robot at `robot` (a host session with the `square` robot's filter
+/// and controller, laps without end), on an ephemeral loopback port in
+/// the current runtime; returns its address.
+pub async fn start_robot_server(robot: SocketAddr) -> SocketAddr {
+    let mut cfg = locus_sim::link_robot::host_config(&locus_sim::SquareConfig::default());
+    cfg.laps = usize::MAX;
+    let link = locus_serve::robot::Link::udp("127.0.0.1:0".parse().unwrap(), robot).unwrap();
+    let attached =
+        locus_serve::robot::Attached::start(link, &cfg, 0.01, std::time::Duration::from_millis(50))
+            .unwrap();
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0")
+        .await
+        .expect("bind 127.0.0.1:0");
+    let addr = listener.local_addr().expect("local addr");
+    tokio::spawn(locus_serve::serve_with_robot(
+        listener,
+        locus_serve::Config::default(),
+        attached,
+    ));
+    addr
+}
+
+/// A simulated robot on loopback UDP in its own thread (detached: it ends
+/// `idle_exit` robot seconds after the host stops sending); its address.
+pub fn spawn_robot(time_scale: f64) -> std::net::SocketAddr {
+    let socket = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let addr = socket.local_addr().unwrap();
+    let cfg = locus_sim::link_robot::RobotConfig {
+        square: locus_sim::SquareConfig {
+            max_time: 5000.0,
+            ..locus_sim::SquareConfig::default()
+        },
+        time_scale,
+        // Generous for a loaded machine: the host answers every packet.
+        idle_exit: 30.0,
+        handshake: std::time::Duration::from_secs(60),
+        ..locus_sim::link_robot::RobotConfig::default()
+    };
+    std::thread::spawn(move || locus_sim::link_robot::run_robot(&socket, &cfg));
+    addr
+}
 
 /// Starts `locus_serve::serve` with `config` on an ephemeral loopback port
 /// in the current runtime; returns its address.
