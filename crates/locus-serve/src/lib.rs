@@ -437,6 +437,53 @@ async fn too_fast(
     true
 }
 
+/// What one WebSocket message from a page comes to after the checks every
+/// page gets (simulator or robot): a JSON text within the rate limit and
+/// when it arrived, or nothing to act on, or the end of the connection.
+enum Incoming {
+    Text(axum::extract::ws::Utf8Bytes, Instant),
+    Skip,
+    Close,
+}
+
+/// Checks one received message: binary messages are answered with an
+/// error, pings skipped, a page over its rate limit warned ([`too_fast`]).
+async fn incoming(
+    msg: Option<Result<Message, axum::Error>>,
+    socket: &mut WebSocket,
+    bucket: &mut Bucket,
+    limits: &Limits,
+) -> Incoming {
+    let Some(Ok(msg)) = msg else {
+        return Incoming::Close;
+    };
+    let now = Instant::now();
+    let text = match msg {
+        Message::Text(t) => t,
+        Message::Binary(_) => {
+            let e = ServerMsg::Error {
+                field: "message".into(),
+                message: "binary messages are not accepted; send JSON text".into(),
+            };
+            return if send(socket, &e).await {
+                Incoming::Skip
+            } else {
+                Incoming::Close
+            };
+        }
+        Message::Close(_) => return Incoming::Close,
+        Message::Ping(_) | Message::Pong(_) => return Incoming::Skip,
+    };
+    if !bucket.take(now) {
+        return if too_fast(socket, bucket, limits, now).await {
+            Incoming::Skip
+        } else {
+            Incoming::Close
+        };
+    }
+    Incoming::Text(text, now)
+}
+
 /// A page attached to the robot: its messages go to the host thread (after
 /// the same size and rate limits), the host's frames come back.
 async fn run_robot_page(mut socket: WebSocket, shared: &Shared, robot: &robot::Attached) {
@@ -452,25 +499,11 @@ async fn run_robot_page(mut socket: WebSocket, shared: &Shared, robot: &robot::A
     loop {
         tokio::select! {
             msg = socket.recv() => {
-                let Some(Ok(msg)) = msg else { break };
-                let now = Instant::now();
-                let text = match msg {
-                    Message::Text(t) => t,
-                    Message::Binary(_) => {
-                        let e = ServerMsg::Error {
-                            field: "message".into(),
-                            message: "binary messages are not accepted; send JSON text".into(),
-                        };
-                        if !send(&mut socket, &e).await { break }
-                        continue;
-                    }
-                    Message::Close(_) => break,
-                    Message::Ping(_) | Message::Pong(_) => continue,
+                let text = match incoming(msg, &mut socket, &mut bucket, &limits).await {
+                    Incoming::Text(text, _) => text,
+                    Incoming::Skip => continue,
+                    Incoming::Close => break,
                 };
-                if !bucket.take(now) {
-                    if !too_fast(&mut socket, &mut bucket, &limits, now).await { break }
-                    continue;
-                }
                 for out in robot.handle_text(text.as_str()) {
                     if !send(&mut socket, &out).await { return }
                 }
@@ -509,25 +542,11 @@ async fn run_session(mut socket: WebSocket, shared: &Shared) {
     loop {
         tokio::select! {
             msg = socket.recv() => {
-                let Some(Ok(msg)) = msg else { break };
-                let now = Instant::now();
-                let text = match msg {
-                    Message::Text(t) => t,
-                    Message::Binary(_) => {
-                        let e = ServerMsg::Error {
-                            field: "message".into(),
-                            message: "binary messages are not accepted; send JSON text".into(),
-                        };
-                        if !send(&mut socket, &e).await { break }
-                        continue;
-                    }
-                    Message::Close(_) => break,
-                    Message::Ping(_) | Message::Pong(_) => continue,
+                let (text, now) = match incoming(msg, &mut socket, &mut bucket, &cfg.limits).await {
+                    Incoming::Text(text, now) => (text, now),
+                    Incoming::Skip => continue,
+                    Incoming::Close => break,
                 };
-                if !bucket.take(now) {
-                    if !too_fast(&mut socket, &mut bucket, &cfg.limits, now).await { break }
-                    continue;
-                }
                 for out in session.handle_text(text.as_str(), now) {
                     if !send(&mut socket, &out).await { return }
                 }
