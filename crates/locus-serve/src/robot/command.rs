@@ -1,0 +1,235 @@
+//! The pages' commands to the host thread, checked before they reach it.
+
+use locus_net::host::Host;
+use serde_json::{Map, Value};
+
+use crate::params::{self, Invalid};
+use crate::protocol::ClientMsg;
+
+/// A page's command to the host thread, validated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Command {
+    /// Resume the path controller.
+    Start,
+    /// Zero wheel speeds (the operator's twist ends too).
+    Stop,
+    /// The operator's body twist (m/s, rad/s) for [`TELEOP_TIMEOUT`](crate::session::TELEOP_TIMEOUT).
+    Teleop {
+        /// Linear speed (m/s).
+        v: f64,
+        /// Turn rate (rad/s).
+        w: f64,
+    },
+    /// Back to the controller (or to zero speeds if stopped).
+    TeleopOff,
+    /// Live settings (a patch: the fields given).
+    Settings(Settings),
+}
+
+/// Live settings from the page: the fields given, each already within
+/// [`params::LIMITS`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Settings {
+    /// `Q11` (m^2 per step).
+    pub q11: Option<f64>,
+    /// `Q22` (rad^2 per step).
+    pub q22: Option<f64>,
+    /// `R11` (m^2).
+    pub r11: Option<f64>,
+    /// `R22` (m^2).
+    pub r22: Option<f64>,
+    /// Whether the filter uses the IR readings.
+    pub use_ir: Option<bool>,
+    /// Gate confidence (0: no gate).
+    pub gate: Option<f64>,
+    /// `V_ref` (m/s).
+    pub v_ref: Option<f64>,
+    /// `W_ref` (rad/s).
+    pub w_ref: Option<f64>,
+    /// Cross-track gain (rad/m).
+    pub k_cross: Option<f64>,
+    /// Heading gain (1/s).
+    pub k_heading: Option<f64>,
+    /// Position gain (1/s).
+    pub k_pos: Option<f64>,
+}
+
+impl Settings {
+    /// The settings in `values` (the `params` message's fields), each
+    /// checked against its limit; all or nothing.
+    ///
+    /// # Errors
+    /// [`Invalid`] naming the first bad field; `ir_sigma` (the
+    /// simulator's injected noise) and unknown fields are refused.
+    pub fn parse(values: &Map<String, Value>) -> Result<Self, Invalid> {
+        let mut s = Self::default();
+        for (key, value) in values {
+            let num = || params::checked(key, value).map(Some);
+            match key.as_str() {
+                "q11" => s.q11 = num()?,
+                "q22" => s.q22 = num()?,
+                "r11" => s.r11 = num()?,
+                "r22" => s.r22 = num()?,
+                "gate" => s.gate = num()?,
+                "v_ref" => s.v_ref = num()?,
+                "w_ref" => s.w_ref = num()?,
+                "k_cross" => s.k_cross = num()?,
+                "k_heading" => s.k_heading = num()?,
+                "k_pos" => s.k_pos = num()?,
+                "use_ir" => s.use_ir = Some(params::boolean(key, value)?),
+                "ir_sigma" => {
+                    return Err(Invalid::new(
+                        key,
+                        "is the simulator's injected noise: a robot's IR noise is its own",
+                    ));
+                }
+                _ => return Err(Invalid::new(key, "is not a live parameter")),
+            }
+        }
+        Ok(s)
+    }
+
+    /// Applies the settings to `host` from its next packet on. Values
+    /// within [`params::LIMITS`] are always accepted (every limit is
+    /// inside the host's domain), so a patch is applied whole.
+    ///
+    /// # Errors
+    /// The host's [`locus_net::Error::Config`] for a value outside its
+    /// domain (the noise, then the gate, then the controller are set in
+    /// that order).
+    pub fn apply(&self, host: &mut Host) -> Result<(), locus_net::Error> {
+        let c = *host.config();
+        let l = c.localiser;
+        if self.q11.is_some() || self.q22.is_some() || self.r11.is_some() || self.r22.is_some() {
+            host.set_noise(
+                self.q11.unwrap_or(l.q11),
+                self.q22.unwrap_or(l.q22),
+                self.r11.unwrap_or(l.r11),
+                self.r22.unwrap_or(l.r22),
+            )?;
+        }
+        if let Some(g) = self.gate {
+            host.set_gate((g > 0.0).then_some(g))?;
+        }
+        if let Some(on) = self.use_ir {
+            host.set_use_ir(on);
+        }
+        let k = c.control;
+        let control = locus_control::Config {
+            v_ref: self.v_ref.unwrap_or(k.v_ref),
+            w_ref: self.w_ref.unwrap_or(k.w_ref),
+            k_cross: self.k_cross.unwrap_or(k.k_cross),
+            k_heading: self.k_heading.unwrap_or(k.k_heading),
+            k_pos: self.k_pos.unwrap_or(k.k_pos),
+            ..k
+        };
+        if control != k {
+            host.set_control(control)?;
+        }
+        Ok(())
+    }
+}
+
+/// A page's message as a host command, validated.
+///
+/// # Errors
+/// [`Invalid`]: a bad value, or a message a live robot cannot do
+/// ([`UNAVAILABLE`](super::UNAVAILABLE)), named by its type.
+pub fn command(msg: ClientMsg) -> Result<Command, Invalid> {
+    let unavailable = |what: &str| {
+        Err(Invalid::new(
+            what,
+            "is not available when attached to a robot (it runs live, in real time, and sends no ground truth)",
+        ))
+    };
+    match msg {
+        ClientMsg::Start {} => Ok(Command::Start),
+        ClientMsg::Stop {} => Ok(Command::Stop),
+        ClientMsg::Teleop { v, w } => Ok(Command::Teleop {
+            v: params::checked("teleop_v", &v)?,
+            w: params::checked("teleop_w", &w)?,
+        }),
+        ClientMsg::TeleopOff {} => Ok(Command::TeleopOff),
+        ClientMsg::Params { values } => Settings::parse(&values).map(Command::Settings),
+        ClientMsg::Step {} => unavailable("step"),
+        ClientMsg::StepCorrection {} => unavailable("step_correction"),
+        ClientMsg::Reset {} => unavailable("reset"),
+        ClientMsg::Speed { .. } => unavailable("speed"),
+        ClientMsg::Scenario { .. } => unavailable("scenario"),
+        ClientMsg::Preset { .. } => unavailable("preset"),
+        ClientMsg::Initial { .. } => unavailable("initial"),
+        ClientMsg::Export {} => unavailable("export"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    use crate::robot::UNAVAILABLE;
+
+    fn host() -> Host {
+        let mut cfg = locus_sim::link_robot::host_config(&locus_sim::SquareConfig::default());
+        cfg.laps = usize::MAX;
+        Host::new(&cfg).unwrap()
+    }
+
+    fn values(v: &Value) -> Map<String, Value> {
+        v.as_object().unwrap().clone()
+    }
+
+    #[test]
+    fn settings_are_checked_whole_and_applied_to_the_host() {
+        for (v, field) in [
+            (json!({"r11": 1e-3, "ir_sigma": 0.01}), "ir_sigma"),
+            (json!({"r11": 1e-3, "q22": "1e999"}), "q22"),
+            (json!({"gate": 1.5}), "gate"),
+            (json!({"use_ir": "maybe"}), "use_ir"),
+            (json!({"start_x": 0.1}), "start_x"),
+        ] {
+            assert_eq!(
+                Settings::parse(&values(&v)).unwrap_err().field,
+                field,
+                "{v}"
+            );
+        }
+        let mut h = host();
+        let before = *h.config();
+        let s = Settings::parse(&values(
+            &json!({"r22": "4e-4", "gate": 0, "use_ir": false, "k_pos": 2}),
+        ))
+        .unwrap();
+        s.apply(&mut h).unwrap();
+        let c = h.config();
+        assert_eq!(c.localiser.r22, 4e-4);
+        assert_eq!(
+            c.localiser.r11, before.localiser.r11,
+            "fields not given are kept"
+        );
+        assert_eq!(c.localiser.gate_confidence, None, "gate 0: no gate");
+        assert!(!c.use_ir);
+        assert_eq!(c.control.k_pos, 2.0);
+        assert_eq!(c.control.v_ref, before.control.v_ref);
+    }
+
+    #[test]
+    fn what_a_live_robot_cannot_do_is_refused_by_name() {
+        for kind in UNAVAILABLE {
+            let text = match kind {
+                "speed" => json!({"type": kind, "factor": 2}),
+                "scenario" => json!({"type": kind, "name": "square"}),
+                "preset" => json!({"type": kind, "step": "a"}),
+                "initial" => json!({"type": kind, "values": {}}),
+                _ => json!({"type": kind}),
+            };
+            let msg: ClientMsg = serde_json::from_value(text).unwrap();
+            let e = command(msg).unwrap_err();
+            assert_eq!(e.field, kind);
+            assert!(e.reason.contains("not available when attached to a robot"));
+        }
+        let msg: ClientMsg =
+            serde_json::from_value(json!({"type": "teleop", "v": 0.1, "w": -1})).unwrap();
+        assert_eq!(command(msg), Ok(Command::Teleop { v: 0.1, w: -1.0 }));
+    }
+}
