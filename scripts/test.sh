@@ -13,6 +13,13 @@ cd "$(dirname "$0")/.."
 
 step() { printf '\n== %s\n' "$*"; }
 
+# A full run is one-shot: incremental caches would only cost disk (over 1 GB
+# for the optimised test profile). A developer may set CARGO_INCREMENTAL=1.
+export CARGO_INCREMENTAL=${CARGO_INCREMENTAL:-0}
+TARGET_DIR=${CARGO_TARGET_DIR:-target}
+disk() { df -h . | awk 'NR == 2 { printf "disk: %s free of %s\n", $4, $2 }'; }
+disk
+
 step "toolchain: rustfmt, clippy, thumbv7em-none-eabihf"
 installed_components=$(rustup component list --installed 2>/dev/null || true)
 for c in rustfmt clippy; do
@@ -87,4 +94,6 @@ step "firmware: under QEMU mps2-an386, bit-identical to the host f32 run; footpr
 (cd firmware && cargo test --locked --target "$HOST_TRIPLE" -p locus-fw-app -- --nocapture)
 
 echo
+disk
+du -sh "$TARGET_DIR" firmware/target 2>/dev/null || true
 echo "all tests passed"
