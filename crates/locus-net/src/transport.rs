@@ -157,6 +157,11 @@ impl Transport for Udp<'_> {
 /// Bytes read from a serial port at a time.
 const READ_CHUNK: usize = 256;
 
+/// Longest wait for room in the line's output buffer: a frame takes under
+/// 5 ms at 115 200 baud, so a line that cannot take one in this time is
+/// stuck, and the send fails.
+const WRITE_TIMEOUT: Duration = Duration::from_secs(1);
+
 /// A byte stream (a serial port; a Bluetooth SPP link is one too): each
 /// packet travels as a COBS frame between `0x00` delimiters
 /// ([`locus_link::framing`]). Garbage, a cut frame or a lost byte cost at
@@ -215,6 +220,12 @@ impl Transport for Serial {
     fn send(&mut self, packet: &[u8]) -> Result<(), Error> {
         let mut frame = [0u8; MAX_FRAME];
         let n = encode_frame(packet, &mut frame).map_err(Error::Encode)?;
+        // The port's one timeout also bounds writes: a read may have left
+        // it near zero, and a write then fails as soon as the line's
+        // buffer is momentarily full.
+        self.port
+            .set_timeout(WRITE_TIMEOUT)
+            .map_err(|e| Error::Io(e.into()))?;
         // No flush: on a tty it waits until the line has sent every byte
         // (tcdrain); the kernel sends the frame on its own.
         self.port.write_all(&frame[..n])?;

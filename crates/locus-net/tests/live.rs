@@ -250,3 +250,94 @@ fn live_loop_on_loopback_applies_a_new_r_from_the_next_packet() {
     );
     assert!(a < b / 5.0, "mean NIS {b} -> {a} after R x 100");
 }
+
+/// The details the host keeps of each IR correction (what the page shows
+/// step by step) are those of the packet's correction: the same NIS,
+/// innovation, decision and posterior as the step; `S`, `K` and the gate
+/// agree with each other; `x-` is the prediction from the belief before
+/// the packet with its wheel travels.
+#[test]
+fn the_host_keeps_the_details_of_every_correction_it_tries() {
+    use locus_core::MotionModel;
+    use locus_core::nalgebra::{Vector2, Vector3};
+    use locus_models::{DiffDrive, WheelTravel};
+
+    let robot_socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let robot_addr = robot_socket.local_addr().unwrap();
+    let robot_cfg = RobotConfig {
+        time_scale: 10.0,
+        ..RobotConfig::default()
+    };
+    let robot = thread::spawn(move || run_robot(&robot_socket, &robot_cfg).unwrap());
+    let cfg = config();
+    let drive = DiffDrive::new(
+        cfg.localiser.wheelbase,
+        cfg.localiser.q11,
+        cfg.localiser.q22,
+    );
+    let host_socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let (mut tried, mut gated, mut predicted) = (0u64, 0u64, 0u64);
+    let mut before = *Host::new(&cfg).unwrap().belief();
+    run_host_live(
+        &mut Udp::to(&host_socket, robot_addr),
+        &cfg,
+        Duration::from_millis(20),
+        |host, tick| {
+            let Some(step) = tick.step else {
+                return ControlFlow::Continue(());
+            };
+            let Some(nis) = step.nis else {
+                assert_eq!(host.corrections_tried(), tried, "no reading tried");
+                before = *host.belief();
+                return ControlFlow::Continue(());
+            };
+            tried += 1;
+            assert_eq!(host.corrections_tried(), tried);
+            let d = host.last_correction().expect("details of the correction");
+            assert_eq!(d.nis, nis);
+            assert_eq!(Some(d.innovation), step.innovation);
+            assert_eq!(d.applied, step.corrected);
+            assert_eq!(d.x_post, step.estimate);
+            assert_eq!(d.x_before_predict, [before.x[0], before.x[1], before.x[2]]);
+            // NIS = y^T S^-1 y, K = P- H^T S^-1, and the gate's decision.
+            let s = locus_core::nalgebra::Matrix2::from_fn(|i, j| d.s[i][j]);
+            let y = Vector2::from(d.innovation);
+            let s_inv = s.try_inverse().unwrap();
+            assert!(((y.transpose() * s_inv * y)[0] - nis).abs() <= 1e-9 * nis.max(1.0));
+            let p = locus_core::nalgebra::Matrix3::from_fn(|i, j| d.p_prior[i][j]);
+            let h = locus_core::nalgebra::Matrix2x3::from_fn(|i, j| d.jacobian[i][j]);
+            let k = p * h.transpose() * s_inv;
+            for i in 0..3 {
+                for j in 0..2 {
+                    assert!((k[(i, j)] - d.k[i][j]).abs() <= 1e-9 * k.amax());
+                }
+            }
+            let threshold = d.gate_threshold.expect("the square host has a gate");
+            assert_eq!(d.applied, nis <= threshold);
+            gated += u64::from(!d.applied);
+            if step.skipped == 0 {
+                let u = WheelTravel {
+                    d1: d.u[0],
+                    d2: d.u[1],
+                };
+                let x = drive.f(&Vector3::from(d.x_before_predict), &u, &Vector2::zeros());
+                assert!(
+                    (x - Vector3::from(d.x_prior)).amax() < 1e-12,
+                    "{x} vs {:?}",
+                    d.x_prior
+                );
+                predicted += 1;
+            }
+            before = *host.belief();
+            if step.robot_time >= 20.0 {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        },
+    )
+    .unwrap();
+    robot.join().unwrap();
+    println!("{tried} corrections tried ({gated} gated out), {predicted} predictions checked");
+    assert!(tried > 200 && predicted > 200, "{tried} / {predicted}");
+}

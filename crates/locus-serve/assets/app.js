@@ -290,7 +290,10 @@ const handlers = {
       document.title = `Locus: attached to the robot (${m.robot.link})`;
       $('robot-link').textContent = m.robot.link;
       // What a live robot cannot do is off (docs/ui.md).
-      for (const id of ['step', 'step-correction', 'reset', 'export', 'speed', 'apply-initial', 'scenario']) $(id).disabled = true;
+      for (const id of ['step', 'reset', 'export', 'speed', 'apply-initial', 'scenario']) $(id).disabled = true;
+      // The robot runs on: the button shows the host's next correction.
+      $('step-correction').title = 'Show the next IR correction the host makes (the robot keeps moving: press stop first to hold it still)';
+      $('detail').textContent = 'Press “Next correction” to see the next correction the host makes on the robot’s packets: prediction, H, S, K, innovation, gate, ellipse before and after. The robot keeps moving (stop it first to hold it still).';
       document.querySelector('footer').textContent = 'The filter (locus-core\'s EKF) runs in the host on the server, on the packets of the robot over the link; this page draws what it sends. Charts: uPlot.';
     }
     clearBuffers(); drawArena();

@@ -27,8 +27,9 @@ pub const TELEOP_TIMEOUT: Duration = Duration::from_millis(500);
 /// still run and plot, the export says it was cut.
 pub const MAX_LOG_STEPS: usize = 30_000;
 
-/// Most simulated time searched by `step_correction` (s).
-const STEP_CORRECTION_MAX_TIME: f64 = 10.0;
+/// Most time searched by `step_correction` (s): simulated time in a
+/// simulation, host time when attached to a robot.
+pub const STEP_CORRECTION_MAX_TIME: f64 = 10.0;
 
 /// A client's session.
 #[derive(Debug)]

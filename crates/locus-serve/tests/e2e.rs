@@ -538,15 +538,7 @@ async fn page_attached_to_a_robot_in_headless_chromium() {
         text.contains("No ground truth from this robot"),
         "robot panel: {text}"
     );
-    for id in [
-        "step",
-        "step-correction",
-        "reset",
-        "export",
-        "presets",
-        "p-ir_sigma",
-        "detail",
-    ] {
+    for id in ["step", "reset", "export", "presets", "p-ir_sigma"] {
         let el = c.find(Locator::Id(id)).await.unwrap();
         assert!(!el.is_displayed().await.unwrap(), "#{id} is hidden");
     }
@@ -625,6 +617,36 @@ async fn page_attached_to_a_robot_in_headless_chromium() {
     assert!(
         nis_after < nis_before / 5.0,
         "mean NIS shown with R: {nis_before}, with 100 R: {nis_after}"
+    );
+
+    // Next correction: the host's next one, shown step by step while the
+    // robot runs on (its posterior is a sample's estimate).
+    let frames = num(&c, "locus.frames").await;
+    click(&c, "step-correction").await;
+    wait_for(
+        &c,
+        &format!("locus.frames > {frames} && locus.lastCorrection !== undefined && locus.lastCorrection !== null"),
+        long,
+    )
+    .await;
+    let detail = text_of(&c, "detail").await;
+    assert!(
+        detail.contains("K = P⁻ Hᵀ S⁻¹")
+            && (detail.contains("ACCEPTED") || detail.contains("REJECTED")),
+        "detail: {detail}"
+    );
+    assert_eq!(
+        js(&c, "locus.state.running").await,
+        json!(true),
+        "the robot runs on"
+    );
+    assert_eq!(
+        js(
+            &c,
+            "locus.lastCorrection.x_post.every((v, i) => Number.isFinite(v))"
+        )
+        .await,
+        json!(true)
     );
 
     // The arrow keys steer: stop the path first (the heading then moves

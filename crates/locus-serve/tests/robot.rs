@@ -3,9 +3,11 @@
 //! over loopback UDP. Over a real WebSocket: the host starts stopped (zero
 //! wheel speeds), `start` drives the path, an `R` multiplied by 100 on the
 //! page lowers the NIS of the host's corrections, the keyboard twist turns
-//! the robot and lapses back to the controller, `stop` sends zero speeds,
+//! the robot and lapses back to the controller, "next correction" shows
+//! the host's next correction while the robot runs on, `stop` sends zero speeds,
 //! the link's counters arrive, there is no ground truth, and what a live
-//! robot cannot do is refused.
+//! robot cannot do is refused. And the same page attached over a serial
+//! line (two pseudo-terminals joined by a cable thread).
 #![allow(clippy::std_instead_of_core, clippy::std_instead_of_alloc)]
 
 mod support;
@@ -159,6 +161,40 @@ async fn the_page_drives_a_robot_over_udp() {
         "mean NIS {nis_before} -> {nis_after}"
     );
 
+    // Next correction: the host's next one, step by step, while the robot
+    // runs on; it is the correction of a sample in the same frame.
+    send(&mut ws, &json!({"type": "step_correction"})).await;
+    let mut frame = Value::Null;
+    samples_until(&mut ws, long, |m| {
+        frame = m.clone();
+        !m["correction"].is_null()
+    })
+    .await;
+    let d = &frame["correction"];
+    assert_eq!(frame["running"], json!(true), "the robot runs on");
+    let sample = frame["samples"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["nis"] == d["nis"])
+        .unwrap_or_else(|| panic!("no sample of the correction {d} in {frame}"));
+    assert_eq!(sample["ekf"], d["x_post"]);
+    assert_eq!(sample["innovation"], d["innovation"]);
+    assert_eq!(sample["applied"], d["applied"]);
+    for key in [
+        "x_prior", "p_prior", "z", "h", "jacobian", "noise", "s", "k", "p_post", "u",
+    ] {
+        assert!(d[key].is_array(), "{key}: {d}");
+    }
+    // Only on request: the next frames carry none.
+    let m = loop {
+        let m = next_json(&mut ws).await;
+        if m["type"] == "state" {
+            break m;
+        }
+    };
+    assert!(m["correction"].is_null(), "{m}");
+
     // Keyboard: a left turn held for 1.5 s (repeated every 150 ms) turns
     // the heading estimate left by far more than the path would.
     let mut heading = Vec::new();
@@ -267,4 +303,122 @@ async fn the_page_drives_a_robot_over_udp() {
     // The robot's clock runs TIME_SCALE times faster than the host's.
     let drift = l["clock_drift_ppm"].as_f64().unwrap() * 1e-6;
     assert!((drift - (TIME_SCALE - 1.0)).abs() < 1.0, "drift {drift}");
+}
+
+/// Copies one pty master to the other until `stop` (the cable between the
+/// robot's and the host's serial ports).
+fn cable(
+    mut from: serialport::TTYPort,
+    mut to: serialport::TTYPort,
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> std::thread::JoinHandle<()> {
+    use std::io::{Read, Write};
+    std::thread::spawn(move || {
+        use serialport::SerialPort;
+        from.set_timeout(Duration::from_millis(5)).unwrap();
+        let mut buf = [0u8; 512];
+        while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+            if let Ok(n) = from.read(&mut buf) {
+                let _ = to.write_all(&buf[..n]);
+            }
+        }
+    })
+}
+
+/// The page attached over a serial line (what `locus serve --robot
+/// serial:/dev/rfcomm0` opens): the host opens the pty by its path, the
+/// simulated robot speaks COBS frames on the other pty, and the page sees
+/// the robot drive and the filter correct, with no frame dropped.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_page_drives_a_robot_over_a_serial_line() {
+    use serialport::{SerialPort, TTYPort};
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    let (robot_master, robot_end) = TTYPort::pair().expect("pty pair");
+    let (host_master, host_end) = TTYPort::pair().expect("pty pair");
+    let device = host_end.name().expect("the pty's path");
+    let stop = Arc::new(AtomicBool::new(false));
+    let up = cable(
+        robot_master.try_clone_native().unwrap(),
+        host_master.try_clone_native().unwrap(),
+        stop.clone(),
+    );
+    let down = cable(host_master, robot_master, stop.clone());
+    let robot_cfg = locus_sim::link_robot::RobotConfig {
+        square: locus_sim::SquareConfig {
+            max_time: 5000.0,
+            ..locus_sim::SquareConfig::default()
+        },
+        time_scale: TIME_SCALE,
+        idle_exit: 30.0,
+        handshake: Duration::from_secs(60),
+        ..locus_sim::link_robot::RobotConfig::default()
+    };
+    std::thread::spawn(move || {
+        let port: Box<dyn SerialPort> = Box::new(robot_end);
+        locus_sim::link_robot::run_robot_over(
+            &mut locus_net::transport::Serial::new(port),
+            &robot_cfg,
+        )
+    });
+
+    let mut cfg = locus_sim::link_robot::host_config(&locus_sim::SquareConfig::default());
+    cfg.laps = usize::MAX;
+    let link = locus_serve::robot::Link::serial(&device, 115_200).unwrap();
+    let attached =
+        locus_serve::robot::Attached::start(link, &cfg, 0.01, Duration::from_millis(50)).unwrap();
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    tokio::spawn(locus_serve::serve_with_robot(
+        listener,
+        locus_serve::Config::default(),
+        attached,
+    ));
+    let (mut ws, _) = tokio_tungstenite::connect_async(format!("ws://{addr}/ws"))
+        .await
+        .unwrap();
+    let long = Duration::from_secs(60);
+    let hello = next_json(&mut ws).await;
+    assert_eq!(
+        hello["robot"]["link"],
+        json!(format!("serial {device} at 115200 baud")),
+        "{hello}"
+    );
+
+    samples_until(&mut ws, long, |m| {
+        m["link"]["applied"].as_u64().unwrap() > 100
+    })
+    .await;
+    send(&mut ws, &json!({"type": "start"})).await;
+    let driving = samples_until(&mut ws, long, |m| m["time"].as_f64().unwrap() > 15.0).await;
+    let first = &driving.first().unwrap()["ekf"];
+    let last = &driving.last().unwrap()["ekf"];
+    let moved = (last[0].as_f64().unwrap() - first[0].as_f64().unwrap())
+        .hypot(last[1].as_f64().unwrap() - first[1].as_f64().unwrap());
+    assert!(moved > 0.5, "the robot drove {moved} m");
+    let (nis, n) = mean_nis(&driving, 0.0);
+    assert!(n > 100 && nis < 10.0, "{n} corrections, mean NIS {nis}");
+    let m = loop {
+        let m = next_json(&mut ws).await;
+        if m["type"] == "state" {
+            break m;
+        }
+    };
+    let l = &m["link"];
+    println!("serial link: {l}");
+    for k in [
+        "lost",
+        "corrupt",
+        "malformed",
+        "frames_malformed",
+        "frames_oversize",
+    ] {
+        assert_eq!(l[k], json!(0), "{k}: {l}");
+    }
+    drop(ws);
+    stop.store(true, Ordering::Relaxed);
+    up.join().unwrap();
+    down.join().unwrap();
+    drop(host_end);
 }

@@ -47,10 +47,11 @@ use config::{control_ok, localiser_error};
 pub use run::{HostReport, LiveTick, run_host, run_host_live, run_host_over};
 
 use locus_control::{Controller, FollowPath, Twist, wheel_speeds};
+use locus_core::{Belief, Update};
 use locus_link::clock::ClockFit;
 use locus_link::receiver::{MAX_JUMP, RESYNC_AFTER};
 use locus_link::{ClockEstimator, Counters, Receiver, Status, Telemetry};
-use locus_models::{Localiser, LocaliserConfig};
+use locus_models::{CorrectionDetail, IrCorrection, IrOutcome, Localiser, LocaliserConfig};
 
 use crate::Error;
 use crate::plausible::Implausible;
@@ -166,6 +167,10 @@ pub struct Host {
     /// The operator's twist and the host time it lapses at.
     teleop: Option<(Twist, f64)>,
     corrections: u64,
+    /// IR readings associated with a wall and tried (applied or gated out).
+    tried: u64,
+    /// The details of the last tried correction.
+    last_correction: Option<CorrectionDetail>,
     filter_errors: u64,
     estimates: Vec<(u32, [f64; 3])>,
 }
@@ -191,6 +196,8 @@ impl Host {
             stopped: false,
             teleop: None,
             corrections: 0,
+            tried: 0,
+            last_correction: None,
             filter_errors: 0,
             estimates: Vec::new(),
         })
@@ -233,6 +240,21 @@ impl Host {
     /// IR corrections applied so far.
     pub fn corrections(&self) -> u64 {
         self.corrections
+    }
+
+    /// IR readings associated with a wall and tried so far (applied or
+    /// gated out): [`Host::last_correction`] is the newest of them.
+    pub fn corrections_tried(&self) -> u64 {
+        self.tried
+    }
+
+    /// The details of the last correction tried (paper 001 eq. 14-22: the
+    /// belief before the packet's prediction, its wheel travels, `x-`,
+    /// `P-`, `z`, `h(x-)`, `H`, `S`, `K`, the innovation, the gate's
+    /// decision, `x+`, `P+`), for a page to show step by step; `None`
+    /// before the first.
+    pub fn last_correction(&self) -> Option<&CorrectionDetail> {
+        self.last_correction.as_ref()
     }
 
     /// Laps of the path completed.
@@ -357,15 +379,16 @@ impl Host {
         let Ok((t, status)) = self.receiver.receive_telemetry(bytes) else {
             return Outcome::Undecodable;
         };
-        let predicted = match status {
+        let before = *self.localiser.belief();
+        let travel = match status {
             Status::Applied { .. } | Status::Resynchronised => {
                 match self.reference.filter(|_| status != Status::Resynchronised) {
                     None => {
                         self.start_stream(&t);
-                        false
+                        None
                     }
                     Some(r) => match self.accept(&t, &r) {
-                        Ok(()) => true,
+                        Ok(u) => Some(u),
                         Err(why) => return Outcome::Dropped(Dropped::Implausible(why)),
                     },
                 }
@@ -376,18 +399,9 @@ impl Host {
         };
         let robot_time = t.timestamp_us as f64 * 1e-6;
         self.clock.push(robot_time, host_time);
-        let (corrected, tried) = match t.ir.filter(|_| predicted && self.cfg.use_ir) {
-            Some([ds1, ds2]) => match self
-                .localiser
-                .ir(&self.cfg.walls, [f64::from(ds1), f64::from(ds2)])
-            {
-                Ok(outcome) => (outcome.applied(), tried_correction(&outcome)),
-                Err(_) => {
-                    self.filter_errors += 1;
-                    (false, None)
-                }
-            },
-            None => (false, None),
+        let (corrected, tried) = match (t.ir.filter(|_| self.cfg.use_ir), travel) {
+            (Some(ir), Some(u)) => self.correct(ir, &before, u),
+            _ => (false, None),
         };
         self.corrections += u64::from(corrected);
         let x = self.localiser.belief().x;
@@ -411,6 +425,46 @@ impl Host {
         })
     }
 
+    /// The IR correction of readings `[ds1, ds2]` (m), after predicting
+    /// from `before` with wheel travels `u` (m): whether it was applied,
+    /// and the NIS and innovation tried. Keeps its details.
+    fn correct(
+        &mut self,
+        [ds1, ds2]: [f32; 2],
+        before: &Belief<f64, 3>,
+        u: [f64; 2],
+    ) -> (bool, Option<(f64, [f64; 2])>) {
+        let prior = *self.localiser.belief();
+        match self
+            .localiser
+            .ir(&self.cfg.walls, [f64::from(ds1), f64::from(ds2)])
+        {
+            Ok(IrOutcome::Associated {
+                observation,
+                update,
+            }) => {
+                let c = IrCorrection {
+                    observation,
+                    z: observation.z(),
+                    prior,
+                    update,
+                };
+                let gate = self.localiser.filter.rules().ekf.gate;
+                if let Some(d) = c.detail(before, u, gate.map(|g| g.threshold(2))) {
+                    self.tried += 1;
+                    self.last_correction = Some(d);
+                }
+                let tried = nis_and_innovation(&update);
+                (update.applied(), tried)
+            }
+            Ok(IrOutcome::Unassociated) => (false, None),
+            Err(_) => {
+                self.filter_errors += 1;
+                (false, None)
+            }
+        }
+    }
+
     /// The first packet of a stream (the first, or after the receiver
     /// re-anchored): it only sets the references.
     fn start_stream(&mut self, t: &Telemetry) {
@@ -422,31 +476,35 @@ impl Host {
         self.refused = None;
     }
 
-    /// Checks `t` against the reference `r` and predicts through it, or
-    /// refuses it (recounted as implausible; the belief is kept).
-    fn accept(&mut self, t: &Telemetry, r: &Reference) -> Result<(), Implausible> {
+    /// Checks `t` against the reference `r` and predicts through it (its
+    /// wheel travels `[d1, d2]` in m), or refuses it (recounted as
+    /// implausible; the belief is kept).
+    fn accept(&mut self, t: &Telemetry, r: &Reference) -> Result<[f64; 2], Implausible> {
         let packets = t.sequence.wrapping_sub(r.sequence);
-        if let Err(why) = self.check(t, r, packets) {
-            self.receiver.refuse_applied();
-            let run = match self.refused {
-                Some((prev, run))
-                    if self
-                        .check(t, &prev, t.sequence.wrapping_sub(prev.sequence))
-                        .is_ok() =>
-                {
-                    run + 1
+        let travel = match self.check(t, r, packets) {
+            Ok(travel) => travel,
+            Err(why) => {
+                self.receiver.refuse_applied();
+                let run = match self.refused {
+                    Some((prev, run))
+                        if self
+                            .check(t, &prev, t.sequence.wrapping_sub(prev.sequence))
+                            .is_ok() =>
+                    {
+                        run + 1
+                    }
+                    _ => 1,
+                };
+                if run >= RESYNC_AFTER {
+                    // The robot's counts or clock moved for good: follow them.
+                    self.resync += 1;
+                    self.start_stream(t);
+                } else {
+                    self.refused = Some((Reference::of(t), run));
                 }
-                _ => 1,
-            };
-            if run >= RESYNC_AFTER {
-                // The robot's counts or clock moved for good: follow them.
-                self.resync += 1;
-                self.start_stream(t);
-            } else {
-                self.refused = Some((Reference::of(t), run));
+                return Err(why);
             }
-            return Err(why);
-        }
+        };
         self.refused = None;
         self.reference = Some(Reference::of(t));
         // Bounded work: a stream of refused packets cannot make the split
@@ -455,13 +513,13 @@ impl Host {
         if self.localiser.counts(t.counts, parts).is_err() {
             self.filter_errors += 1;
         }
-        Ok(())
+        Ok(travel)
     }
 
     /// `t`'s content against the reference `r`, `packets` sequence numbers
-    /// before it.
+    /// before it; the wheel travels `[d1, d2]` (m) since `r` if plausible.
     #[allow(clippy::cast_precision_loss)]
-    fn check(&self, t: &Telemetry, r: &Reference, packets: u32) -> Result<(), Implausible> {
+    fn check(&self, t: &Telemetry, r: &Reference, packets: u32) -> Result<[f64; 2], Implausible> {
         let elapsed = if t.timestamp_us >= r.timestamp_us {
             (t.timestamp_us - r.timestamp_us) as f64 * 1e-6
         } else {
@@ -474,7 +532,8 @@ impl Host {
             .map_or([0.0; 2], |u| [u.d1, u.d2]);
         self.cfg
             .limits
-            .check(elapsed, packets, travel, odometer.wheel().quantum(), t.ir)
+            .check(elapsed, packets, travel, odometer.wheel().quantum(), t.ir)?;
+        Ok(travel)
     }
 
     /// The wheel speeds `[right, left]` (m/s) for the estimate at host
@@ -514,18 +573,10 @@ impl Host {
     }
 }
 
-/// The NIS and innovation of the correction an IR outcome tried (applied
-/// or gated out), if the reading was associated.
-fn tried_correction(outcome: &locus_models::IrOutcome<f64>) -> Option<(f64, [f64; 2])> {
-    use locus_core::Update;
-    match outcome {
-        locus_models::IrOutcome::Associated {
-            update: Update::Applied { correction, .. } | Update::Gated { correction, .. },
-            ..
-        } => Some((
-            correction.nis,
-            [correction.innovation[0], correction.innovation[1]],
-        )),
-        _ => None,
-    }
+/// The NIS and innovation of the correction an update applied or, gated
+/// out, refused (its last attempt).
+fn nis_and_innovation(update: &Update<f64, 3, 2>) -> Option<(f64, [f64; 2])> {
+    update
+        .correction()
+        .map(|c| (c.nis, [c.innovation[0], c.innovation[1]]))
 }

@@ -22,6 +22,9 @@ pub enum Command {
     },
     /// Back to the controller (or to zero speeds if stopped).
     TeleopOff,
+    /// Show the host's next IR correction step by step (the robot keeps
+    /// its drive: it runs live).
+    NextCorrection,
     /// Live settings (a patch: the fields given).
     Settings(Settings),
 }
@@ -152,7 +155,7 @@ pub fn command(msg: ClientMsg) -> Result<Command, Invalid> {
         ClientMsg::TeleopOff {} => Ok(Command::TeleopOff),
         ClientMsg::Params { values } => Settings::parse(&values).map(Command::Settings),
         ClientMsg::Step {} => unavailable("step"),
-        ClientMsg::StepCorrection {} => unavailable("step_correction"),
+        ClientMsg::StepCorrection {} => Ok(Command::NextCorrection),
         ClientMsg::Reset {} => unavailable("reset"),
         ClientMsg::Speed { .. } => unavailable("speed"),
         ClientMsg::Scenario { .. } => unavailable("scenario"),

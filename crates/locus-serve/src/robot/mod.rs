@@ -12,8 +12,10 @@
 //! A robot is not a simulation: it sends no ground truth (no true pose,
 //! RMSE or NEES), runs in real time (no speed factor) and cannot be
 //! stepped, rewound or reset; those messages are answered with an `error`
-//! ([`UNAVAILABLE`]). The host starts stopped (zero wheel speeds) until a
-//! page sends `start`.
+//! ([`UNAVAILABLE`]). `step_correction` does not pause it: the next IR
+//! correction the host tries (within [`STEP_CORRECTION_MAX_TIME`](crate::session::STEP_CORRECTION_MAX_TIME) of host
+//! time) arrives in `state.correction`, to every page. The host starts
+//! stopped (zero wheel speeds) until a page sends `start`.
 //!
 //! Files: this one ([`Attached`], [`Link`]), `command.rs` (the pages'
 //! [`Command`]s and [`Settings`], checked), `publisher.rs` (the host
@@ -42,16 +44,10 @@ use crate::{Error, Limits};
 
 /// The message types a live robot cannot do: it cannot be stepped,
 /// rewound, reset, sped up or switched to another scenario, and the host
-/// keeps no log to export.
-pub const UNAVAILABLE: [&str; 8] = [
-    "step",
-    "step_correction",
-    "reset",
-    "speed",
-    "scenario",
-    "preset",
-    "initial",
-    "export",
+/// keeps no log to export. (`step_correction` shows the host's next
+/// correction while the robot runs on.)
+pub const UNAVAILABLE: [&str; 7] = [
+    "step", "reset", "speed", "scenario", "preset", "initial", "export",
 ];
 
 /// How often the host thread looks at the pages' commands when no packet
@@ -170,8 +166,9 @@ impl Attached {
             latencies: VecDeque::new(),
             last: None,
             due: true,
+            capture: None,
         };
-        let state = publisher.state(&probe, None);
+        let state = publisher.state(&probe, None, None);
         publisher.lock().state = state;
         let latest = Arc::clone(&publisher.latest);
         let description = link.describe();

@@ -8,11 +8,12 @@ use core::time::Duration;
 use std::sync::{Mutex, PoisonError, mpsc};
 use std::time::Instant;
 
+use locus_models::CorrectionDetail;
 use locus_net::host::{Drive, Host, LiveTick};
 use tokio::sync::broadcast;
 
 use crate::protocol::{LinkHealth, ParamValues, Sample, ServerMsg};
-use crate::session::TELEOP_TIMEOUT;
+use crate::session::{STEP_CORRECTION_MAX_TIME, TELEOP_TIMEOUT};
 
 use super::{Command, LATENCY_WINDOW, Latest};
 
@@ -61,6 +62,9 @@ pub(super) struct Publisher {
     pub(super) last: Option<LiveTick>,
     /// A frame is due now (a command changed something).
     pub(super) due: bool,
+    /// A page asked for the next correction: the host's count of tried
+    /// corrections and the host time (s) when it asked.
+    pub(super) capture: Option<(u64, f64)>,
 }
 
 impl Publisher {
@@ -114,6 +118,7 @@ impl Publisher {
             self.latencies.push_back(l);
         }
         self.last = Some(*tick);
+        let correction = self.captured(host, tick.host_time);
         let now = Instant::now();
         if self.due
             || self
@@ -123,11 +128,33 @@ impl Publisher {
             self.due = false;
             self.last_frame = Some(now);
             let samples = core::mem::take(&mut self.pending);
-            let frame = self.state(host, Some(samples));
-            self.lock().state = self.state(host, None);
+            let frame = self.state(host, Some(samples), correction);
+            self.lock().state = self.state(host, None, None);
             self.publish(frame);
         }
         ControlFlow::Continue(())
+    }
+
+    /// The correction a page asked for, once the host has tried it (a
+    /// frame is then due); an `error` to the pages if none came within
+    /// [`STEP_CORRECTION_MAX_TIME`] of host time.
+    fn captured(&mut self, host: &Host, now: f64) -> Option<CorrectionDetail> {
+        let (tried, asked) = self.capture?;
+        if host.corrections_tried() > tried {
+            self.capture = None;
+            self.due = true;
+            return host.last_correction().copied();
+        }
+        if now - asked > STEP_CORRECTION_MAX_TIME {
+            self.capture = None;
+            self.publish(ServerMsg::Error {
+                field: "step_correction".into(),
+                message: format!(
+                    "no IR correction in {STEP_CORRECTION_MAX_TIME} s (no wall in range, the IR off, or the robot silent)"
+                ),
+            });
+        }
+        None
     }
 
     /// Applies a page's command at host time `now` (s).
@@ -144,6 +171,7 @@ impl Publisher {
                 let _ = host.set_teleop(v, w, now + TELEOP_TIMEOUT.as_secs_f64());
             }
             Command::TeleopOff => host.clear_teleop(),
+            Command::NextCorrection => self.capture = Some((host.corrections_tried(), now)),
             Command::Settings(s) => match s.apply(host) {
                 Ok(()) => {
                     let p = params_msg(host);
@@ -173,9 +201,15 @@ impl Publisher {
         self.publish(frame);
     }
 
-    /// The `state` frame of the host now, with `samples` (none: empty).
+    /// The `state` frame of the host now, with `samples` (none: empty) and
+    /// a `correction` a page asked for.
     #[allow(clippy::cast_possible_truncation)]
-    pub(super) fn state(&self, host: &Host, samples: Option<Vec<Sample>>) -> ServerMsg {
+    pub(super) fn state(
+        &self,
+        host: &Host,
+        samples: Option<Vec<Sample>>,
+        correction: Option<CorrectionDetail>,
+    ) -> ServerMsg {
         let t = self.last.unwrap_or(LiveTick {
             host_time: 0.0,
             step: None,
@@ -198,7 +232,7 @@ impl Publisher {
             teleop: matches!(drive, Drive::Teleop { .. }),
             samples: samples.unwrap_or_default(),
             beams: Vec::new(),
-            correction: None,
+            correction,
             figure: None,
             failure: None,
             link: Some(LinkHealth {

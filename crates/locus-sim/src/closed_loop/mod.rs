@@ -70,6 +70,7 @@ mod sim;
 
 pub use crate::error::Error;
 pub use config::{NoiseModel, SquareConfig};
-pub use live::{CorrectionDetail, LiveParams, SimStep, Teleop};
+pub use live::{LiveParams, SimStep, Teleop};
+pub use locus_models::CorrectionDetail;
 pub use record::StepRecord;
 pub use sim::{SquareSim, run_square};

@@ -3,9 +3,8 @@
 
 use locus_control::{Controller, FollowPath, Twist, wheel_speeds};
 use locus_core::{Belief, Ekf};
-use locus_models::{IrOutcome, IrPairObservation, Localiser, WheelTravel};
+use locus_models::{IrCorrection, IrOutcome, IrPairObservation, Localiser, WheelTravel};
 
-use super::live::Corrected;
 use super::plant::{IrReadings, Plant};
 use super::{Error, LiveParams, NoiseModel, SimStep, SquareConfig, StepRecord, Teleop};
 use crate::robot::Pose;
@@ -256,10 +255,10 @@ impl SquareSim {
     /// localiser behind its gate. Realistic mode: the localiser associates
     /// on its estimate ([`Localiser::ir`]); ideal mode: the plant's
     /// observation, associated on the truth.
-    fn correct(&mut self) -> Result<(IrReadings, Option<Corrected>), Error> {
+    fn correct(&mut self) -> Result<(IrReadings, Option<IrCorrection>), Error> {
         let use_ir = self.cfg.use_ir;
         let prior = *self.localiser.belief();
-        let corrected = |observation: IrPairObservation<f64>, z, update| Corrected {
+        let corrected = |observation: IrPairObservation<f64>, z, update| IrCorrection {
             observation,
             z,
             prior,
@@ -297,7 +296,7 @@ impl SquareSim {
         &self,
         u: &WheelTravel<f64>,
         reading: IrReadings,
-        corrected: Option<&Corrected>,
+        corrected: Option<&IrCorrection>,
     ) -> StepRecord {
         let belief = self.localiser.belief();
         let truth = self.plant.truth();
@@ -316,7 +315,7 @@ impl SquareSim {
             innovation: first.map(|c| [c.innovation[0], c.innovation[1]]),
             nis: first.map(|c| c.nis),
             applied: corrected.is_some_and(|c| c.update.applied()),
-            gain: corrected.and_then(Corrected::gain_diagonal),
+            gain: corrected.and_then(IrCorrection::gain_diagonal),
             nees: planar_nees(x, &belief.p, &truth),
         }
     }
