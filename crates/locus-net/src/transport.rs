@@ -46,6 +46,16 @@ pub trait Transport {
     fn framing(&self) -> FrameCounters {
         FrameCounters::default()
     }
+
+    /// Waits until everything sent has left (a byte stream: the line's
+    /// output queue has drained), so that a process ending right after its
+    /// last packet does not discard it; a datagram is gone once sent.
+    ///
+    /// # Errors
+    /// The link failed.
+    fn drain(&mut self) -> Result<(), Error> {
+        Ok(())
+    }
 }
 
 /// UDP: one packet per datagram.
@@ -268,5 +278,15 @@ impl Transport for Serial {
 
     fn framing(&self) -> FrameCounters {
         self.decoder.counters()
+    }
+
+    fn drain(&mut self) -> Result<(), Error> {
+        self.port
+            .set_timeout(WRITE_TIMEOUT)
+            .map_err(|e| Error::Io(e.into()))?;
+        // tcdrain: returns once a UART has sent every byte written (a pty
+        // returns at once: it has no transmit queue).
+        self.port.flush()?;
+        Ok(())
     }
 }

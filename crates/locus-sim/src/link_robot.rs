@@ -365,6 +365,8 @@ pub fn run_robot_over(link: &mut impl Transport, cfg: &RobotConfig) -> Result<Ro
     }
     report.commands = receiver.counters();
     report.framing = link.framing();
+    // The last telemetry must reach the host before the process ends.
+    link.drain()?;
     Ok(report)
 }
 
