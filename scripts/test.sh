@@ -7,7 +7,9 @@
 # (Debian's package; installed with apt-get when missing) and rustup's
 # llvm-tools (llvm-nm for the footprint).
 # Also Debian's chromium and chromium-driver for the teaching UI's
-# end-to-end tests (crates/locus-serve/tests/e2e.rs; apt-get, sudo if not root).
+# end-to-end tests (crates/locus-serve/tests/e2e.rs), and iverilog and
+# verilator for the Verilog correction core (hdl/; apt-get, sudo if not
+# root).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -36,6 +38,14 @@ if ! command -v qemu-system-arm >/dev/null 2>&1; then
 fi
 grep -q "^llvm-tools" <<<"$installed_components" || rustup component add llvm-tools
 HOST_TRIPLE=$(rustc -vV | sed -n 's/^host: //p')
+
+step "hardware simulators: Icarus Verilog and Verilator (the Verilog correction core, hdl/)"
+if ! command -v iverilog >/dev/null 2>&1 || ! command -v verilator >/dev/null 2>&1; then
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO=sudo
+  $SUDO apt-get update
+  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y iverilog verilator
+fi
 
 step "python: filterpy cross-check requirements"
 PY=${LOCUS_PYTHON:-python3}

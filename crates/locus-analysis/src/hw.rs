@@ -49,7 +49,7 @@
 
 use core::fmt;
 
-use locus_core::nalgebra::{Matrix2, Matrix2x3, Matrix3, SMatrix, Vector2, Vector3};
+use locus_core::nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x2, SMatrix, Vector2, Vector3};
 
 /// A state of the correction FSM (papers 000/003, Fig. 3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -259,6 +259,9 @@ pub struct CoreRun {
     pub x_post: Vector3<f32>,
     /// Posterior covariance `P+` (plain form).
     pub p_post: Matrix3<f32>,
+    /// The gain `G` (step 5); for scalar updates, the gain of component
+    /// `i` in column `i`.
+    pub gain: Matrix3x2<f32>,
     /// Total clock cycles from `start` to done.
     pub cycles: u64,
     /// Time per correction (s): `cycles / clock_hz`.
@@ -478,13 +481,19 @@ impl Machine {
         Ok(self.divide(step, &adj, det))
     }
 
-    fn finish(self, x_post: Vector3<f32>, p_post: Matrix3<f32>) -> Result<CoreRun, HwError> {
+    fn finish(
+        self,
+        x_post: Vector3<f32>,
+        p_post: Matrix3<f32>,
+        gain: Matrix3x2<f32>,
+    ) -> Result<CoreRun, HwError> {
         if !(x_post.iter().all(|v| v.is_finite()) && p_post.iter().all(|v| v.is_finite())) {
             return Err(HwError::Numeric("a result is not finite"));
         }
         Ok(CoreRun {
             x_post,
             p_post,
+            gain,
             cycles: self.cycle,
             time_s: self.cycle as f64 / self.cfg.clock_hz,
             operators: self.peak,
@@ -515,7 +524,7 @@ pub fn run(cfg: &HwConfig, schedule: Schedule, inp: &CoreInputs) -> Result<CoreR
             let o7 = m.matmul("9 O7 = G H", &g, &inp.h);
             let o8 = m.matmul("10 O8 = O7 P-", &o7, &inp.p);
             let p = m.addsub("11 P+ = P- - O8", &inp.p, &o8, true);
-            m.finish(x, p)
+            m.finish(x, p, g)
         }
         Schedule::Scalar => {
             if inp.r[(0, 1)] != 0.0 || inp.r[(1, 0)] != 0.0 {
@@ -525,6 +534,7 @@ pub fn run(cfg: &HwConfig, schedule: Schedule, inp: &CoreInputs) -> Result<CoreR
             }
             let mut x = inp.x;
             let mut p = inp.p;
+            let mut gain = Matrix3x2::zeros();
             for i in 0..2 {
                 let hi = inp.h.fixed_view::<1, 3>(i, 0).into_owned();
                 let o1 = m.matmul("s1 O1 = P h_i^T", &p, &hi.transpose());
@@ -536,6 +546,7 @@ pub fn run(cfg: &HwConfig, schedule: Schedule, inp: &CoreInputs) -> Result<CoreR
                     return Err(HwError::Numeric("scalar innovation variance <= 0"));
                 }
                 let g = m.divide("s4 G = O1 / O3", &o1, s);
+                gain.set_column(i, &g);
                 let zi = SMatrix::<f32, 1, 1>::new(inp.z[i]);
                 let hxi = SMatrix::<f32, 1, 1>::new(inp.hx[i]);
                 let mut o5 = m.addsub("s5 O5 = z_i - h_i(X-)", &zi, &hxi, true);
@@ -550,7 +561,7 @@ pub fn run(cfg: &HwConfig, schedule: Schedule, inp: &CoreInputs) -> Result<CoreR
                 let o8 = m.matmul("s9 O8 = O7 P", &o7, &p);
                 p = m.addsub("s10 P = P - O8", &p, &o8, true);
             }
-            m.finish(x, p)
+            m.finish(x, p, gain)
         }
     }
 }

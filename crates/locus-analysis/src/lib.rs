@@ -13,8 +13,12 @@
 //!   configurable operator latencies, number of parallel datapaths and clock.
 //!   It executes the arithmetic in `f32` in the schedule's order and counts
 //!   the floating-point operators the schedule needs.
+//! * [`hdl`]: Verilog binary32 adder, multiplier and divider for that core
+//!   (repository directory `hdl/`), bit-exact against Rust's `f32`, with
+//!   the vector generator and the Icarus Verilog runner that test them.
 //!
 //! Units are SI inside (m, rad, s); the paper's pixels are px.
 
 pub mod doa;
+pub mod hdl;
 pub mod hw;

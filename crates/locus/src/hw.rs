@@ -53,6 +53,22 @@ pub struct Args {
     /// Clock (MHz; the papers' timings are at 50 MHz).
     #[arg(long, default_value_t = 50.0, value_parser = crate::args::positive_f64)]
     pub clock_mhz: f64,
+    /// Write the test vectors of the Verilog core and units (hdl/) to DIR
+    /// and exit: add.txt, sub.txt, mul.txt, div.txt (special-value pairs,
+    /// then random operand pairs, with Rust's f32 results), core_random.txt
+    /// and core_wall45.txt (the input bank and the software schedule's G,
+    /// X+, P+ per correction).
+    #[arg(long, value_name = "DIR")]
+    pub export_vectors: Option<std::path::PathBuf>,
+    /// Random operand pairs per unit in the exported vectors.
+    #[arg(long, default_value_t = 1_000_000, requires = "export_vectors")]
+    pub unit_vectors: usize,
+    /// Random corrections in core_random.txt.
+    #[arg(long, default_value_t = 10_000, requires = "export_vectors")]
+    pub core_vectors: usize,
+    /// Do not simulate the Verilog core (needs Icarus Verilog, `iverilog`).
+    #[arg(long)]
+    pub no_sim: bool,
 }
 
 /// Paper 000's laser-to-wall model (n = 3, m = 2) in f32.
@@ -117,6 +133,21 @@ pub fn run(args: &Args) -> Result<()> {
         clock_hz: args.clock_mhz * 1e6,
     };
     cfg.validate()?;
+    if let Some(dir) = &args.export_vectors {
+        let built = HwConfig {
+            latencies: locus_analysis::hdl::built_latencies()?,
+            ..cfg
+        };
+        let e = crate::hw_rtl::export(dir, args.unit_vectors, args.core_vectors, &built)?;
+        println!(
+            "locus hw: wrote {} vectors per binary32 unit (add, sub, mul, div), {} random corrections and {} corrections of a wall45 run to {}",
+            e.unit_vectors,
+            e.random_corrections,
+            e.wall45_corrections,
+            dir.display()
+        );
+        return Ok(());
+    }
     let (inputs, sw) = example()?;
     println!(
         "locus hw: correction core of papers 000/003, {} datapaths ({} with a divider), {} MHz, latencies mult {} / add {} / div {} cycles, +{} per state",
@@ -241,5 +272,8 @@ pub fn run(args: &Args) -> Result<()> {
         ]);
     }
     println!("{sweep}");
+    if !args.no_sim {
+        crate::hw_rtl::print_simulated(&inputs, args.clock_mhz)?;
+    }
     Ok(())
 }

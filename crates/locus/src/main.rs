@@ -10,6 +10,7 @@ mod font;
 mod guide;
 mod host;
 mod hw;
+mod hw_rtl;
 mod link_scenario;
 mod metrics;
 mod output;

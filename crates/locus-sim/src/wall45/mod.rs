@@ -75,6 +75,6 @@ mod run;
 mod table3;
 
 pub use config::{INSTANTS, LaserModel, PAPER_TABLE3, Wall45Config, Wall45Noise};
-pub use record::Wall45Record;
+pub use record::{LaserCorrection, Wall45Record};
 pub use run::run_wall45;
 pub use table3::{InstantStats, Table3, table3};

@@ -1,6 +1,26 @@
 //! The logged step of `wall45` ([`Wall45Record`]) and its CSV row.
 
+use locus_core::Belief;
+use locus_core::nalgebra::{Matrix2, Matrix2x3, Vector2};
 use locus_eval::{Record, Sample};
+
+/// What one correction with the paper's laser model (m = 2) was given: the
+/// prior and the quantities the papers' Nios II computed in software for
+/// the FPGA core (`H`, `R`, `z`, `h(X-)`), so that the core can be run on
+/// the same corrections.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LaserCorrection {
+    /// The prior belief `X-`, `P-` (m, m, rad).
+    pub prior: Belief<f64, 3>,
+    /// The measurement Jacobian `H` at `X-`.
+    pub h: Matrix2x3<f64>,
+    /// The measurement noise `R` (m^2).
+    pub r: Matrix2<f64>,
+    /// The measurement `Z = [u, v]` (m).
+    pub z: Vector2<f64>,
+    /// The predicted measurement `h(X-)` (m).
+    pub hx: Vector2<f64>,
+}
 
 /// One step of `wall45` (SI units, world frame).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -19,6 +39,8 @@ pub struct Wall45Record {
     /// Innovation of the correction (m): the range component (`u` for the
     /// paper's model, `gamma` for the exact one), if corrected.
     pub innovation: Option<f64>,
+    /// The correction's inputs, for the paper's model.
+    pub laser: Option<LaserCorrection>,
 }
 
 fn fmt_opt(v: Option<f64>) -> String {

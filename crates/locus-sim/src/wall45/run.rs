@@ -8,7 +8,7 @@ use rand::SeedableRng;
 use rand::rngs::StdRng;
 
 use super::config::{INSTANTS, LaserModel, PAPER_TABLE3, Wall45Config, Wall45Noise};
-use super::record::Wall45Record;
+use super::record::{LaserCorrection, Wall45Record};
 use crate::closed_loop::Error;
 use crate::noise::gauss;
 use crate::robot::{DriveCommand, Kinematics, Pose, Robot};
@@ -195,6 +195,7 @@ pub fn run_wall45(
             };
             let mut correction = None;
             let mut innovation = None;
+            let mut laser_correction = None;
             let mut range = None;
             match cfg.model {
                 LaserModel::Paper => {
@@ -207,7 +208,14 @@ pub fn run_wall45(
                     };
                     if let Some(z) = z {
                         range = Some(z.norm());
-                        if paper.h(&belief.x).is_some() {
+                        if let Some(hx) = paper.h(&belief.x) {
+                            laser_correction = Some(LaserCorrection {
+                                prior: belief,
+                                h: paper.jacobian(&belief.x),
+                                r: paper.noise(&belief.x),
+                                z,
+                                hx,
+                            });
                             let c = ekf.correct_sequential(&belief, &paper, &z)?;
                             correction = Some((c.nis, c.dof, c.applied));
                             innovation = Some(c.innovation[0]);
@@ -250,6 +258,7 @@ pub fn run_wall45(
                 tread_speeds: [u.v_l, u.v_r],
                 range,
                 innovation,
+                laser: laser_correction,
             });
             step += 1;
         }

@@ -1,0 +1,147 @@
+//! `locus hw`'s side of the Verilog core (`hdl/`): the test vectors it
+//! exports from the Rust models (binary32 units, random corrections, the
+//! corrections of a `wall45` run) and the Icarus simulation of the core
+//! whose cycles it prints beside the model's.
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use locus_analysis::hdl::ekf_core::{self, CoreSim};
+use locus_analysis::hdl::fp32::{self, Op};
+use locus_analysis::hw::{self, CoreInputs, HwConfig, Schedule};
+
+use crate::table::with_header;
+use locus_sim::wall45::{Wall45Config, run_wall45};
+
+/// Seed of the exported random vectors and of the `wall45` run.
+pub const SEED: u64 = 1;
+
+/// The core's inputs of every correction of a default `wall45` run with
+/// the paper's laser model (`seed`), rounded to `f32` as the processor
+/// writes them into the core's bank.
+///
+/// # Errors
+/// A simulator error of the run.
+#[allow(clippy::cast_possible_truncation)]
+pub fn wall45_inputs(seed: u64) -> Result<Vec<CoreInputs>> {
+    let mut out = Vec::new();
+    run_wall45(&Wall45Config::default(), seed, &mut |r| {
+        if let Some(c) = r.laser {
+            out.push(CoreInputs {
+                x: c.prior.x.map(|v| v as f32),
+                p: c.prior.p.map(|v| v as f32),
+                h: c.h.map(|v| v as f32),
+                r: c.r.map(|v| v as f32),
+                z: c.z.map(|v| v as f32),
+                hx: c.hx.map(|v| v as f32),
+            });
+        }
+    })?;
+    Ok(out)
+}
+
+/// What [`export`] wrote.
+#[derive(Debug, Clone, Copy)]
+pub struct Exported {
+    /// Vectors per binary32 unit (add, sub, mul, div), special values
+    /// included.
+    pub unit_vectors: usize,
+    /// Random corrections.
+    pub random_corrections: usize,
+    /// Corrections of the `wall45` run.
+    pub wall45_corrections: usize,
+}
+
+/// Writes the test vectors to `dir`: `add.txt`, `sub.txt`, `mul.txt`,
+/// `div.txt` (every pair of special values, then `units` random operand
+/// pairs from the seed [`SEED`]), `core_random.txt` (`corrections` random
+/// corrections) and `core_wall45.txt`, with the expected results of the
+/// Rust models (`cfg`: the units' latencies).
+///
+/// # Errors
+/// The directory or a file cannot be written; a model error.
+pub fn export(dir: &Path, units: usize, corrections: usize, cfg: &HwConfig) -> Result<Exported> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut unit_vectors = 0;
+    for (i, op) in [Op::Add, Op::Sub, Op::Mul, Op::Div].into_iter().enumerate() {
+        let mut vectors = fp32::special_vectors(op);
+        vectors.extend(fp32::random_vectors(op, units, SEED + i as u64));
+        let name = match op {
+            Op::Add => "add",
+            Op::Sub => "sub",
+            Op::Mul => "mul",
+            Op::Div => "div",
+        };
+        fp32::write_vectors(&dir.join(format!("{name}.txt")), &vectors)?;
+        unit_vectors = vectors.len();
+    }
+    let random = ekf_core::random_inputs(corrections, SEED);
+    ekf_core::write_vectors(&dir.join("core_random.txt"), cfg, &random)?;
+    let wall45 = wall45_inputs(SEED)?;
+    ekf_core::write_vectors(&dir.join("core_wall45.txt"), cfg, &wall45)?;
+    Ok(Exported {
+        unit_vectors,
+        random_corrections: random.len(),
+        wall45_corrections: wall45.len(),
+    })
+}
+
+/// Prints the Verilog core's simulated cycles and time on `inputs` (Icarus
+/// Verilog) beside the model's with the units' latencies and the paper's
+/// 2.08 us; "n/a" with the reason when the simulator is missing.
+///
+/// # Errors
+/// The latency header cannot be read; a model error.
+#[allow(clippy::cast_precision_loss)]
+pub fn print_simulated(inputs: &CoreInputs, clock_mhz: f64) -> Result<()> {
+    let latencies = locus_analysis::hdl::built_latencies()?;
+    let cfg = HwConfig {
+        latencies,
+        clock_hz: clock_mhz * 1e6,
+        ..HwConfig::default()
+    };
+    let model = hw::run(&cfg, Schedule::Inverse2x2, inputs)?;
+    let us = |cycles: u64| format!("{:.2}", cycles as f64 / clock_mhz);
+    println!(
+        "Verilog core (hdl/core/ekf_core.v), units built with latencies mult {} / add {} / div {} cycles, +1 per state, {clock_mhz} MHz:",
+        latencies.mul, latencies.add, latencies.div
+    );
+    let mut table = with_header([
+        "",
+        "cycles",
+        "time [us]",
+        "G, X+, P+ vs software f32 schedule",
+    ]);
+    match CoreSim::Icarus.run(&cfg, core::slice::from_ref(inputs)) {
+        Ok(r) => table.add_row(vec![
+            "simulated (Icarus Verilog)".to_owned(),
+            r.cycles_max.to_string(),
+            us(r.cycles_max),
+            if r.mismatches == 0 {
+                "bit-exact (18 of 18 words)".to_owned()
+            } else {
+                format!("{} of 18 words differ", r.mismatches)
+            },
+        ]),
+        Err(e) => table.add_row(vec![
+            "simulated (Icarus Verilog)".to_owned(),
+            "n/a".to_owned(),
+            "n/a".to_owned(),
+            format!("n/a: {e}"),
+        ]),
+    };
+    table.add_row(vec![
+        "model, same latencies".to_owned(),
+        model.cycles.to_string(),
+        us(model.cycles),
+        "-".to_owned(),
+    ]);
+    table.add_row(vec![
+        "paper 003 (EP4CE115, 50 MHz)".to_owned(),
+        "104".to_owned(),
+        "2.08".to_owned(),
+        "-".to_owned(),
+    ]);
+    println!("{table}");
+    Ok(())
+}

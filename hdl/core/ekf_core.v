@@ -1,0 +1,269 @@
+// The EKF correction core of papers 000 and 003 (spec MODELS.md section 1):
+// n = 3 states, m = 2 measurements, the 11-step schedule
+//   1 O1 = P- H^T      2 O2 = H O1       3 O3 = O2 + R     4 O4 = inv(O3)
+//   5 G = O1 O4        6 O5 = z - h(X-)  7 O6 = G O5       8 X+ = X- + O6
+//   9 O7 = G H        10 O8 = O7 P-     11 P+ = P- - O8
+// on nine datapaths (one per element of the largest, 3x3, result), each
+// with a pipelined binary32 multiplier and adder/subtractor; datapaths 0-3
+// also carry a divider (the four entries of the 2x2 inverse). Step 4 is the
+// determinant a d - b c on datapath 0, then the four divisions
+// d/det, -b/det, -c/det, a/det (negation flips the sign bit).
+//
+// Every element is computed in the order of the software reference
+// (locus_analysis::hw::run): a dot product of length k is
+// ((a0 b0 + a1 b1) + a2 b2), each product and sum rounded to nearest even,
+// so the core's results equal the software f32 schedule bit for bit.
+//
+// Processor interface (the papers' Nios II side): while not busy, write the
+// input bank (X-, P-, H, R, z, h(X-); addresses below) with wr_en, pulse
+// start for one cycle; `done` rises when X+, P+ and G are in the bank and
+// stays high until the next start; read any register combinationally at
+// rd_addr.
+//
+// Timing (the FSM states of the papers' Fig. 3). Let Lm, La, Ld be the
+// multiplier, adder and divider latencies. After the edge that samples
+// start: waiting 2 cycles, then one wave per step, each a sequence of
+// state visits of (latency + 1) cycles, the +1 being the cycle whose end
+// writes the bank:
+//   dot product, k = 2 or 3: mult1 Lm + 1, mult2 2, multadd (k - 1) La + 1
+//   element-wise add or subtract: add La + 1;  division: div1 Ld + 1
+//   determinant: mult1 Lm + 1, mult2 2, add La + 1
+// In mult1 the k products enter the multiplier one per cycle; each product
+// is caught as it leaves (the last ones during mult2); multadd feeds the
+// adder (p0 + p1), then (sum + p2) as soon as the sum leaves it. The cycle
+// count is the cycle-level model's (`locus hw`) with these latencies and a
+// transition of one cycle.
+
+`include "fp_latency.vh"
+
+module ekf_core (
+    input  wire        clk,
+    input  wire        rst,
+    input  wire        wr_en,
+    input  wire [6:0]  wr_addr,
+    input  wire [31:0] wr_data,
+    input  wire [6:0]  rd_addr,
+    output wire [31:0] rd_data,
+    input  wire        start,
+    output reg         busy,
+    output reg         done,
+    output reg  [2:0]  state
+);
+    // Register bank addresses (row-major matrices).
+    localparam X = 0, P = 3, H = 12, R = 18, Z = 22, HX = 24;   // inputs
+    localparam O1 = 26, O2 = 32, O3 = 36, DET = 40, O4 = 41, G = 45,
+               O5 = 51, O6 = 53, XP = 56, O7 = 59, O8 = 68, PP = 77;
+    localparam NREG = 86;
+
+    // The papers' FSM states (the `state` output).
+    localparam [2:0] S_WAITING = 3'd0, S_MULT1 = 3'd1, S_MULT2 = 3'd2,
+                     S_MULTADD = 3'd3, S_ADD = 3'd4, S_DIV1 = 3'd5;
+
+    localparam integer LM = `FP_MUL_LAT, LA = `FP_ADD_LAT, LD = `FP_DIV_LAT;
+    // First cycle of multadd (or of the determinant's add) in a wave.
+    localparam integer SUM0 = LM + 3;
+
+    // The steps (one wave each) and the kind of each.
+    localparam [3:0] T_O1 = 4'd0, T_O2 = 4'd1, T_O3 = 4'd2, T_DET = 4'd3,
+                     T_O4 = 4'd4, T_G = 4'd5, T_O5 = 4'd6, T_O6 = 4'd7,
+                     T_XP = 4'd8, T_O7 = 4'd9, T_O8 = 4'd10, T_PP = 4'd11;
+    localparam [2:0] K_DOT3 = 3'd0, K_DOT2 = 3'd1, K_ADD = 3'd2, K_SUB = 3'd3,
+                     K_DIV = 3'd4, K_DET = 3'd5;
+
+    function [2:0] kind_of(input [3:0] step);
+        case (step)
+            T_O1, T_O2, T_O8:       kind_of = K_DOT3;
+            T_G, T_O6, T_O7:        kind_of = K_DOT2;
+            T_O3, T_XP:             kind_of = K_ADD;
+            T_O5, T_PP:             kind_of = K_SUB;
+            T_O4:                   kind_of = K_DIV;
+            default:                kind_of = K_DET;
+        endcase
+    endfunction
+
+    // Cycles of a wave of each kind.
+    function [5:0] length_of(input [2:0] kind);
+        case (kind)
+            K_DOT3:        length_of = SUM0 + 2 * LA + 1;
+            K_DOT2, K_DET: length_of = SUM0 + LA + 1;
+            K_DIV:         length_of = LD + 1;
+            default:       length_of = LA + 1;
+        endcase
+    endfunction
+
+    // The step whose result register `r` is, and the datapath computing it
+    // (element index within the result); -1: an input register.
+    function integer owner_step(input integer r);
+        if (r >= PP) owner_step = T_PP;
+        else if (r >= O8) owner_step = T_O8;
+        else if (r >= O7) owner_step = T_O7;
+        else if (r >= XP) owner_step = T_XP;
+        else if (r >= O6) owner_step = T_O6;
+        else if (r >= O5) owner_step = T_O5;
+        else if (r >= G) owner_step = T_G;
+        else if (r >= O4) owner_step = T_O4;
+        else if (r >= DET) owner_step = T_DET;
+        else if (r >= O3) owner_step = T_O3;
+        else if (r >= O2) owner_step = T_O2;
+        else if (r >= O1) owner_step = T_O1;
+        else owner_step = -1;
+    endfunction
+
+    function integer owner_base(input integer r);
+        case (owner_step(r))
+            T_PP: owner_base = PP;   T_O8: owner_base = O8;
+            T_O7: owner_base = O7;   T_XP: owner_base = XP;
+            T_O6: owner_base = O6;   T_O5: owner_base = O5;
+            T_G:  owner_base = G;    T_O4: owner_base = O4;
+            T_DET: owner_base = DET; T_O3: owner_base = O3;
+            T_O2: owner_base = O2;   default: owner_base = O1;
+        endcase
+    endfunction
+
+    // ---- control ---------------------------------------------------------
+    reg [3:0] step;
+    reg [5:0] w;          // cycle within the wave (or within waiting)
+    reg       waiting;    // the two waiting cycles after start
+    wire [2:0] kind = kind_of(step);
+    wire       last = !waiting && (w == length_of(kind) - 1);
+    // The product index entering the multipliers this cycle.
+    wire [1:0] k = (w < 3) ? w[1:0] : 2'd0;
+
+    always @(posedge clk) begin
+        if (rst) begin
+            busy <= 1'b0;
+            done <= 1'b0;
+            waiting <= 1'b0;
+            step <= 4'd0;
+            w <= 6'd0;
+        end else if (!busy) begin
+            if (start) begin
+                busy <= 1'b1;
+                done <= 1'b0;
+                waiting <= 1'b1;
+                step <= 4'd0;
+                w <= 6'd0;
+            end
+        end else if (waiting) begin
+            if (w == 6'd1) begin
+                waiting <= 1'b0;
+                w <= 6'd0;
+            end else begin
+                w <= w + 6'd1;
+            end
+        end else if (last) begin
+            w <= 6'd0;
+            if (step == T_PP) begin
+                busy <= 1'b0;
+                done <= 1'b1;
+            end else begin
+                step <= step + 4'd1;
+            end
+        end else begin
+            w <= w + 6'd1;
+        end
+    end
+
+    // The papers' state of the current cycle.
+    always @* begin
+        if (!busy || waiting) state = S_WAITING;
+        else case (kind)
+            K_DOT3, K_DOT2, K_DET:
+                state = (w <= LM) ? S_MULT1 :
+                        (w < SUM0) ? S_MULT2 :
+                        (kind == K_DET) ? S_ADD : S_MULTADD;
+            K_DIV:   state = S_DIV1;
+            default: state = S_ADD;
+        endcase
+    end
+
+    // ---- register bank ---------------------------------------------------
+    wire [32*NREG-1:0] bank;
+    wire [31:0] result [0:8];
+    assign rd_data = (rd_addr < NREG) ? bank[32*rd_addr +: 32] : 32'd0;
+
+    genvar r;
+    generate
+        for (r = 0; r < NREG; r = r + 1) begin : regs
+            reg [31:0] q;
+            assign bank[32*r +: 32] = q;
+            always @(posedge clk) begin
+                if (!busy && wr_en && wr_addr == r)
+                    q <= wr_data;
+                else if (owner_step(r) >= 0 && busy && last && step == owner_step(r))
+                    q <= result[r - owner_base(r)];
+            end
+        end
+    endgenerate
+
+`define B(i) bank[32*(i) +: 32]
+// Operand i0 + s k of a dot product (k = 0, 1, 2).
+`define SEL(i0, s) ((k == 2'd0) ? `B(i0) : (k == 2'd1) ? `B((i0) + (s)) : `B((i0) + 2 * (s)))
+
+    // ---- datapaths -------------------------------------------------------
+    genvar e;
+    generate
+        for (e = 0; e < 9; e = e + 1) begin : lane
+            // Element (i, j) of a 3x2 / 2x2 result (2 columns), of a 3x3
+            // result (3 columns).
+            localparam integer I2 = e / 2, J2 = e % 2, I3 = e / 3, J3 = e % 3;
+            reg  [31:0] oa, ob;      // operands from the bank
+            reg  [31:0] p0, p1, p2;  // products caught from the multiplier
+            wire [31:0] mul_y, add_y, div_y;
+            wire [31:0] add_a = (kind == K_ADD || kind == K_SUB) ? oa :
+                                (w == SUM0) ? p0 : add_y;
+            wire [31:0] add_b = (kind == K_ADD || kind == K_SUB) ? ob :
+                                (w == SUM0) ? p1 : p2;
+            wire        add_sub = (kind == K_SUB || kind == K_DET);
+
+            always @* begin
+                case (step)
+                    T_O1: begin oa = `SEL(P + 3 * I2, 1);  ob = `SEL(H + 3 * J2, 1);  end
+                    T_O2: begin oa = `SEL(H + 3 * I2, 1);  ob = `SEL(O1 + J2, 2);     end
+                    T_O3: begin oa = `B(O2 + e % 4);       ob = `B(R + e % 4);        end
+                    T_DET: begin
+                        oa = (k == 2'd0) ? `B(O3 + 0) : `B(O3 + 1);
+                        ob = (k == 2'd0) ? `B(O3 + 3) : `B(O3 + 2);
+                    end
+                    T_O4: begin
+                        // adj(O3) = [d, -b; -c, a], each over det.
+                        case (e % 4)
+                            0: oa = `B(O3 + 3);
+                            1: oa = `B(O3 + 1) ^ 32'h8000_0000;
+                            2: oa = `B(O3 + 2) ^ 32'h8000_0000;
+                            default: oa = `B(O3 + 0);
+                        endcase
+                        ob = `B(DET);
+                    end
+                    T_G:  begin oa = `SEL(O1 + 2 * I2, 1); ob = `SEL(O4 + J2, 2);     end
+                    T_O5: begin oa = `B(Z + e % 2);        ob = `B(HX + e % 2);       end
+                    T_O6: begin oa = `SEL(G + 2 * (e % 3), 1); ob = `SEL(O5, 1);      end
+                    T_XP: begin oa = `B(X + e % 3);        ob = `B(O6 + e % 3);       end
+                    T_O7: begin oa = `SEL(G + 2 * I3, 1);  ob = `SEL(H + J3, 3);      end
+                    T_O8: begin oa = `SEL(O7 + 3 * I3, 1); ob = `SEL(P + J3, 3);      end
+                    default: begin oa = `B(P + e);         ob = `B(O8 + e);           end
+                endcase
+            end
+
+            fp_mul mul (.clk(clk), .a(oa), .b(ob), .y(mul_y));
+            fp_add add (.clk(clk), .a(add_a), .b(add_b), .sub(add_sub), .y(add_y));
+            if (e < 4) begin : with_div
+                fp_div div (.clk(clk), .a(oa), .b(ob), .y(div_y));
+            end else begin : no_div
+                assign div_y = 32'd0;
+            end
+
+            // Products leave the multiplier LM cycles after entering it.
+            always @(posedge clk) begin
+                if (w == LM) p0 <= mul_y;
+                if (w == LM + 1) p1 <= mul_y;
+                if (w == LM + 2) p2 <= mul_y;
+            end
+
+            assign result[e] = (kind == K_DIV) ? div_y : add_y;
+        end
+    endgenerate
+
+`undef SEL
+`undef B
+endmodule

@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Synthesises the Verilog correction core (hdl/core/ekf_core.v on the
+# binary32 units of hdl/fp/) with Yosys for the papers' FPGA family,
+# Cyclone IV E (synth_intel -family cycloneive: Yosys maps no DSP blocks
+# there, so the multipliers become logic elements), and for Lattice ECP5
+# (synth_ecp5: 18x18 multipliers in DSP blocks), and prints the logic
+# cells, flip-flops, DSP multipliers and the longest combinational path
+# (cells, Yosys's `ltp`; Yosys estimates no Fmax without place and route).
+# Installs Debian's yosys when missing. Takes about 10 minutes on 2 cores.
+# Usage: bash scripts/hw_synth.sh [OUT_DIR]   (default: target/hw-synth)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+OUT=${1:-target/hw-synth}
+mkdir -p "$OUT"
+
+if ! command -v yosys >/dev/null 2>&1; then
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO=sudo
+  $SUDO apt-get update
+  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y yosys
+fi
+
+SOURCES="hdl/fp/fp_add.v hdl/fp/fp_mul.v hdl/fp/fp_div.v hdl/core/ekf_core.v"
+synth() {
+  local name=$1 cmd=$2
+  local start=$SECONDS
+  yosys -q -l "$OUT/$name.log" -p "read_verilog -I hdl/fp $SOURCES; $cmd -top ekf_core; tee -o $OUT/$name.stat stat; tee -o $OUT/$name.ltp ltp -noff" >/dev/null
+  echo "$name: $((SECONDS - start)) s"
+}
+synth cycloneive "synth_intel -family cycloneive"
+synth ecp5 "synth_ecp5"
+
+count() { awk -v pat="$2" '$1 ~ pat { s += $2 } END { print s + 0 }' "$OUT/$1.stat"; }
+ltp() { sed -n 's/.*Longest topological path in ekf_core (length=\([0-9]*\)).*/\1/p' "$OUT/$1.ltp" | tail -1; }
+printf '\n| target | logic cells | flip-flops | DSP multipliers | longest path [cells] |\n|---|---|---|---|---|\n'
+printf '| Cyclone IV E (synth_intel) | %s LEs (cycloneiv_lcell_comb) | %s | 0 (not mapped by Yosys) | %s |\n' \
+  "$(count cycloneive 'lcell_comb$')" "$(count cycloneive 'dffeas$|_DFF')" "$(ltp cycloneive)"
+printf '| Lattice ECP5 (synth_ecp5) | %s LUT4 | %s | %s MULT18X18D | %s |\n' \
+  "$(count ecp5 '^LUT4$')" "$(count ecp5 '^TRELLIS_FF$')" "$(count ecp5 '^MULT18X18D$')" "$(ltp ecp5)"
+printf '| papers 000/003 (Quartus, EP4CE115) | 22 089 LEs | - | 175 DSP 9x9 | Fmax 49.08 MHz |\n'
