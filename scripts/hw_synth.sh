@@ -6,7 +6,7 @@
 # (synth_ecp5: 18x18 multipliers in DSP blocks), and prints the logic
 # cells, flip-flops, DSP multipliers and the longest combinational path
 # (cells, Yosys's `ltp`; Yosys estimates no Fmax without place and route).
-# Installs Debian's yosys when missing. Takes about 10 minutes on 2 cores.
+# Installs Debian's yosys when missing. Takes about 35 minutes on 2 cores.
 # Usage: bash scripts/hw_synth.sh [OUT_DIR]   (default: target/hw-synth)
 set -euo pipefail
 cd "$(dirname "$0")/.."
