@@ -7,6 +7,7 @@ use std::net::SocketAddr;
 
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 
+pub mod browser;
 pub mod load;
 
 /// Starts `locus_serve::serve_with_robot`, attached over loopback UDP to
