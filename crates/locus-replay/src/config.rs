@@ -56,6 +56,21 @@ pub struct Config {
     /// and a range of, say, 1e154 m (finite, so a valid field) would
     /// otherwise throw an ungated estimate that far away.
     pub max_range: f64,
+    /// Where the initial pose comes from.
+    pub start: Start,
+}
+
+/// Where a replay's initial pose comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Start {
+    /// The log's `start` pose (with [`Config::initial_std`]); without one,
+    /// the ground truth at the first odometry time; without that, the
+    /// pose the first sightings fix ([`crate::initial`]).
+    #[default]
+    Log,
+    /// The pose the first sightings fix, whatever else the log gives (a
+    /// replay that takes nothing from the truth).
+    Sightings,
 }
 
 /// The calibration states of the replay's filter (see
@@ -127,6 +142,7 @@ impl Default for Config {
             horizon: 1.0,
             truth_max_gap: 0.25,
             max_range: 1000.0,
+            start: Start::Log,
         }
     }
 }

@@ -52,6 +52,7 @@
 extern crate alloc;
 
 mod config;
+pub mod initial;
 pub mod log;
 pub mod noise;
 mod report;
@@ -70,9 +71,9 @@ use locus_models::calibrated_unicycle::{BEARING_BIAS, OMEGA_BIAS, OMEGA_SCALE, V
 use locus_models::range_bearing::RangeBearing;
 use locus_models::unicycle::{Unicycle, Velocities};
 
-pub use config::{Calibration, Config};
+pub use config::{Calibration, Config, Start};
 pub use log::{Landmark, Log, RefusedTime, Sighting, TIME_TOLERANCE, TimeProblem};
-pub use report::Report;
+pub use report::{Report, StartedFrom};
 pub use step::{EventKind, SightingOutcome, Step, Unusable};
 
 /// Cap on one sighting's NIS in [`Report::innovation_nll`]: the 99.9 %
@@ -86,9 +87,14 @@ pub enum Error {
     /// The log has no odometry: nothing to replay.
     #[error("the log has no odometry")]
     NoOdometry,
-    /// The log gives no initial pose and has no ground truth at the first
-    /// odometry time.
-    #[error("no initial pose: the log has no start pose and no ground truth at {time} s")]
+    /// The log gives no initial pose, has no ground truth at the first
+    /// odometry time, and its sightings fix none ([`initial`]).
+    #[error(
+        "no initial pose: the log has no start pose, no ground truth at {time} s, and its first \
+         sightings fix none (at least {min} that agree, on two landmarks or more, within {window} s)",
+        min = initial::MIN_INLIERS,
+        window = initial::WINDOWS[initial::WINDOWS.len() - 1]
+    )]
     NoStart {
         /// The first odometry time, s.
         time: f64,
@@ -498,6 +504,36 @@ fn honest(mut s: locus_eval::Summary, r: &Report) -> locus_eval::Summary {
     s
 }
 
+/// The initial pose at `t0` (the first odometry time), its covariance and
+/// where it came from, as [`Config::start`] says.
+fn initial_pose(
+    log: &Log,
+    cfg: &Config,
+    t0: f64,
+) -> Result<(Vector3<f64>, SMatrix<f64, 3, 3>, StartedFrom), Error> {
+    let given = match cfg.start {
+        Start::Sightings => None,
+        Start::Log => log
+            .start
+            .map(|p| (p, StartedFrom::Log))
+            .or_else(|| {
+                log.truth
+                    .pose_at(t0, cfg.truth_max_gap)
+                    .map(|p| (p, StartedFrom::Truth))
+            }),
+    };
+    if let Some((p, from)) = given {
+        let [sx, sy, st] = cfg.initial_std;
+        return Ok((
+            Vector3::new(p.x, p.y, wrap_angle(p.theta)),
+            SMatrix::<f64, 3, 3>::from_diagonal(&Vector3::new(sx * sx, sy * sy, st * st)),
+            from,
+        ));
+    }
+    let fix = initial::from_sightings(log, cfg).ok_or(Error::NoStart { time: t0 })?;
+    Ok((fix.pose, fix.covariance, StartedFrom::Sightings(fix)))
+}
+
 /// Replays `log` with `cfg`, handing each step (in canonical time order,
 /// with its final estimate, and with [`Config::smooth`] its smoothed one)
 /// to `sink`.
@@ -509,13 +545,7 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
     cfg.validate()?;
     let first = log.odometry.first().ok_or(Error::NoOdometry)?;
     let t0 = first.time;
-    let start = match log.start {
-        Some(p) => p,
-        None => log
-            .truth
-            .pose_at(t0, cfg.truth_max_gap)
-            .ok_or(Error::NoStart { time: t0 })?,
-    };
+    let (pose, pose_covariance, started_from) = initial_pose(log, cfg, t0)?;
     let mut previous = f64::NEG_INFINITY;
     for (index, s) in log.sightings.iter().enumerate() {
         if s.arrival < previous {
@@ -533,7 +563,6 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
         }
         previous = s.arrival;
     }
-    let pose = Vector3::new(start.x, start.y, wrap_angle(start.theta));
     let mut x = StateVector::zeros();
     x[0] = pose[0];
     x[1] = pose[1];
@@ -542,20 +571,18 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
     x[OMEGA_SCALE] = cfg.calibration.initial[1];
     x[OMEGA_BIAS] = cfg.calibration.initial[2];
     x[BEARING_BIAS] = cfg.calibration.initial[3];
-    let [sx, sy, st] = cfg.initial_std;
     let [cv, cw, cb, cz] = cfg.calibration.std;
-    let belief = Belief::new(
-        x,
-        StateMatrix::from_diagonal(&StateVector::from([
-            sx * sx,
-            sy * sy,
-            st * st,
-            cv * cv,
-            cw * cw,
-            cb * cb,
-            cz * cz,
-        ])),
-    );
+    let mut p = StateMatrix::from_diagonal(&StateVector::from([
+        0.0,
+        0.0,
+        0.0,
+        cv * cv,
+        cw * cw,
+        cb * cb,
+        cz * cz,
+    ]));
+    p.fixed_view_mut::<3, 3>(0, 0).copy_from(&pose_covariance);
+    let belief = Belief::new(x, p);
     let mut ekf = Ekf::default();
     if let Some(g) = cfg.gate {
         ekf = ekf
@@ -611,6 +638,7 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
             final_belief: pose_belief(&belief),
             calibration: calibration_of(&belief),
             smoothed_calibration: None,
+            started_from,
         },
         held: Vec::with_capacity(if cfg.smooth { events } else { 0 }),
         nodes: Vec::with_capacity(if cfg.smooth { events } else { 0 }),

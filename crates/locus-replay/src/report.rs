@@ -70,6 +70,19 @@ pub struct Report {
     /// The smoother's calibration at the first event (the estimate from the
     /// whole log), with [`Config::smooth`](crate::Config::smooth).
     pub smoothed_calibration: Option<[(f64, f64); 4]>,
+    /// Where the initial pose came from.
+    pub started_from: StartedFrom,
+}
+
+/// Where a replay's initial pose came from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StartedFrom {
+    /// The log's `start` pose.
+    Log,
+    /// The ground truth at the first odometry time.
+    Truth,
+    /// The first sightings ([`crate::initial`]).
+    Sightings(crate::initial::Fix),
 }
 
 impl Report {

@@ -6,7 +6,10 @@
 use std::path::PathBuf;
 
 use locus_logs::mrclam::Dataset;
-use locus_replay::{Config, EventKind, Log, Report, Sighting, Step, replay};
+use locus_core::wrap_angle;
+use locus_replay::{
+    Config, EventKind, Log, Report, Sighting, Start, StartedFrom, Step, initial, replay,
+};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 
@@ -478,5 +481,99 @@ fn velocities_ten_percent_off_need_no_hand_set_scale() {
     assert!(b.summary.ekf_position_rmse < 1.05 * a.summary.ekf_position_rmse);
     for share in b.summary.within_3_sigma {
         assert!(share >= INSIDE_3_SIGMA);
+    }
+}
+
+/// Without a start pose or the ground truth (a user's own log), the first
+/// sightings fix the initial pose: within the fix's own 3 sigma of the
+/// truth, and the replay from it as accurate as from the true start.
+#[test]
+fn the_first_sightings_fix_the_start_when_the_log_gives_none() {
+    println!(
+        "| robot | fix error x, y [m], theta [rad] | its 1 sigma | sightings / inliers / landmarks | span [s] | filter RMSE from the fix / the truth [m] | smoother |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    for (i, log) in logs().iter().enumerate() {
+        let cfg = Config {
+            start: Start::Sightings,
+            ..Config::default()
+        };
+        let (delay, _) = locus_replay::noise::estimate_delay(log, &cfg).expect("delay");
+        let cfg = Config {
+            odometry_delay: delay,
+            smooth: true,
+            ..cfg
+        };
+        let fix = initial::from_sightings(log, &cfg).expect("a fix");
+        let t0 = log.odometry[0].time;
+        let truth = log.truth.pose_at(t0, cfg.truth_max_gap).expect("truth at t0");
+        let error = [
+            fix.pose[0] - truth.x,
+            fix.pose[1] - truth.y,
+            wrap_angle(fix.pose[2] - truth.theta),
+        ];
+        let sigma = [0, 1, 2].map(|k| fix.covariance[(k, k)].sqrt());
+        let from_fix = run(log, &cfg);
+        assert!(matches!(from_fix.started_from, StartedFrom::Sightings(_)));
+        let from_truth = run(
+            log,
+            &Config {
+                start: Start::Log,
+                ..cfg
+            },
+        );
+        let (a, b) = (&from_fix.summary, &from_truth.summary);
+        let (sa, sb) = (
+            from_fix.smoothed.expect("smoothed"),
+            from_truth.smoothed.expect("smoothed"),
+        );
+        println!(
+            "| {} | {:.3}, {:.3}, {:.3} | {:.3}, {:.3}, {:.3} | {} / {} / {} | {:.1} | {:.3} / {:.3} | {:.3} / {:.3} |",
+            i + 1,
+            error[0],
+            error[1],
+            error[2],
+            sigma[0],
+            sigma[1],
+            sigma[2],
+            fix.sightings,
+            fix.inliers,
+            fix.landmarks,
+            fix.span,
+            a.ekf_position_rmse,
+            b.ekf_position_rmse,
+            sa.ekf_position_rmse,
+            sb.ekf_position_rmse
+        );
+        for k in 0..3 {
+            assert!(error[k].abs() <= 3.0 * sigma[k], "robot {} component {k}", i + 1);
+        }
+        assert!(
+            a.ekf_position_rmse <= 1.05 * b.ekf_position_rmse,
+            "robot {}",
+            i + 1
+        );
+        assert!(
+            sa.ekf_position_rmse <= 1.05 * sb.ekf_position_rmse,
+            "robot {}",
+            i + 1
+        );
+        for share in a.within_3_sigma.iter().chain(&sa.within_3_sigma) {
+            assert!(*share >= INSIDE_3_SIGMA, "robot {}: {share}", i + 1);
+        }
+        // Gross and relabelled sightings among the first ones do not set it.
+        let (bad, n) = corrupted(log, 3 + i as u64);
+        let fix = initial::from_sightings(&bad, &cfg).expect("a fix");
+        println!(
+            "  with {n} corrupted sightings: fix error {:.3}, {:.3}, {:.3} ({} of {} sightings agree)",
+            fix.pose[0] - truth.x,
+            fix.pose[1] - truth.y,
+            wrap_angle(fix.pose[2] - truth.theta),
+            fix.inliers,
+            fix.sightings
+        );
+        assert!((fix.pose[0] - truth.x).abs() <= 3.0 * fix.covariance[(0, 0)].sqrt());
+        assert!((fix.pose[1] - truth.y).abs() <= 3.0 * fix.covariance[(1, 1)].sqrt());
+        assert!(wrap_angle(fix.pose[2] - truth.theta).abs() <= 3.0 * fix.covariance[(2, 2)].sqrt());
     }
 }
