@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use locus_logs::locus_csv;
-use locus_replay::{Config, Error, Log, Step, replay};
+use locus_replay::{Config, Error, Log, StartedFrom, Step, replay};
 
 /// A robot driving at 0.2 m/s, turning at 0.1 rad/s, for 10 s at 50 Hz,
 /// with sightings of three landmarks every 0.5 s (range and bearing from
@@ -94,13 +94,15 @@ fn bad_configurations_and_logs_are_errors() {
         replay(&log, &bad, |_| {}),
         Err(Error::InvalidConfig(_))
     ));
+    // No start pose, no truth, and sightings of one landmark only: nothing
+    // fixes the start.
     let mut no_start = log.clone();
     no_start.start = None;
     no_start.truth = Default::default();
-    assert!(matches!(
-        replay(&no_start, &Config::default(), |_| {}),
-        Err(Error::NoStart { .. })
-    ));
+    no_start.sightings.retain(|s| s.landmark == 1);
+    let err = replay(&no_start, &Config::default(), |_| {}).unwrap_err();
+    assert!(matches!(err, Error::NoStart { .. }), "{err}");
+    assert!(err.to_string().contains("sightings fix none"), "{err}");
     let mut empty = log.clone();
     empty.odometry.clear();
     assert!(matches!(
@@ -206,4 +208,38 @@ fn a_sighting_the_filter_cannot_use_is_refused_and_the_belief_kept() {
         matches!(refused[..], [locus_replay::Unusable::Filter(_)]),
         "{refused:?}"
     );
+}
+
+/// A log with no start pose and no ground truth (a user's own robot) starts
+/// where its first sightings put it, and localises as well as from the
+/// true start.
+#[test]
+fn a_log_with_no_start_and_no_truth_starts_where_its_sightings_put_it() {
+    let known = Log::from_locus(
+        "s",
+        locus_csv::parse(&text(false), Path::new("s.csv")).unwrap(),
+    );
+    let stripped: String = text(false)
+        .lines()
+        .filter(|l| !l.starts_with("start,") && !l.starts_with("truth,"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let log = Log::from_locus(
+        "s",
+        locus_csv::parse(&stripped, Path::new("s.csv")).unwrap(),
+    );
+    assert!(log.start.is_none() && log.truth.poses().is_empty());
+    let mut last = None;
+    let r = replay(&log, &Config::default(), |s| last = Some(*s)).unwrap();
+    let StartedFrom::Sightings(fix) = r.started_from else {
+        panic!("{:?}", r.started_from);
+    };
+    // The robot starts at the origin, heading along x.
+    assert!(fix.pose.norm() < 0.05, "{}", fix.pose);
+    assert_eq!(fix.landmarks, 3);
+    assert!(r.summary.ekf_position_rmse.is_nan(), "no truth: n/a");
+    let mut last_known = None;
+    replay(&known, &Config::default(), |s| last_known = Some(*s)).unwrap();
+    let (a, b) = (last.unwrap().belief.x, last_known.unwrap().belief.x);
+    assert!((a - b).norm() < 1e-3, "{a} against {b}");
 }
