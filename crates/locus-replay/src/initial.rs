@@ -126,7 +126,11 @@ fn pairs(log: &Log, cfg: &Config, t0: f64) -> Vec<Pair> {
     let mut odometry = log.odometry.iter().peekable();
     let advance = |pose: &mut Vector3<f64>, t: &mut f64, to: f64, v: f64, omega: f64| {
         if to > *t {
-            let u = Velocities { v, omega, dt: to - *t };
+            let u = Velocities {
+                v,
+                omega,
+                dt: to - *t,
+            };
             *pose = model.f(pose, &u, &Vector2::zeros());
             *t = to;
         }
@@ -224,7 +228,8 @@ fn fit(pairs: &[Pair], t0: f64) -> Option<Fix> {
             let t = a.map - rotate(theta, a.seen);
             let pose = Vector3::new(t.x, t.y, theta);
             let (agree, cost) = inliers(&pose, pairs);
-            let better = best.is_none_or(|(n, c, _)| agree.len() > n || (agree.len() == n && cost < c));
+            let better =
+                best.is_none_or(|(n, c, _)| agree.len() > n || (agree.len() == n && cost < c));
             if better {
                 best = Some((agree.len(), cost, pose));
             }
@@ -252,7 +257,10 @@ fn fit(pairs: &[Pair], t0: f64) -> Option<Fix> {
         let q = rotate(pose[2], p.seen);
         Matrix2x3::new(1.0, 0.0, -q.y, 0.0, 1.0, q.x)
     };
-    let a: Matrix3<f64> = agree.iter().map(|p| jacobian(p).transpose() * jacobian(p)).sum();
+    let a: Matrix3<f64> = agree
+        .iter()
+        .map(|p| jacobian(p).transpose() * jacobian(p))
+        .sum();
     let mut ids: Vec<u32> = agree.iter().map(|p| p.landmark).collect();
     ids.sort_unstable();
     ids.dedup();

@@ -513,14 +513,11 @@ fn initial_pose(
 ) -> Result<(Vector3<f64>, SMatrix<f64, 3, 3>, StartedFrom), Error> {
     let given = match cfg.start {
         Start::Sightings => None,
-        Start::Log => log
-            .start
-            .map(|p| (p, StartedFrom::Log))
-            .or_else(|| {
-                log.truth
-                    .pose_at(t0, cfg.truth_max_gap)
-                    .map(|p| (p, StartedFrom::Truth))
-            }),
+        Start::Log => log.start.map(|p| (p, StartedFrom::Log)).or_else(|| {
+            log.truth
+                .pose_at(t0, cfg.truth_max_gap)
+                .map(|p| (p, StartedFrom::Truth))
+        }),
     };
     if let Some((p, from)) = given {
         let [sx, sy, st] = cfg.initial_std;

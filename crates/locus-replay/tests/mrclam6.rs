@@ -5,8 +5,8 @@
 
 use std::path::PathBuf;
 
-use locus_logs::mrclam::Dataset;
 use locus_core::wrap_angle;
+use locus_logs::mrclam::Dataset;
 use locus_replay::{
     Config, EventKind, Log, Report, Sighting, Start, StartedFrom, Step, initial, replay,
 };
@@ -506,7 +506,10 @@ fn the_first_sightings_fix_the_start_when_the_log_gives_none() {
         };
         let fix = initial::from_sightings(log, &cfg).expect("a fix");
         let t0 = log.odometry[0].time;
-        let truth = log.truth.pose_at(t0, cfg.truth_max_gap).expect("truth at t0");
+        let truth = log
+            .truth
+            .pose_at(t0, cfg.truth_max_gap)
+            .expect("truth at t0");
         let error = [
             fix.pose[0] - truth.x,
             fix.pose[1] - truth.y,
@@ -546,7 +549,11 @@ fn the_first_sightings_fix_the_start_when_the_log_gives_none() {
             sb.ekf_position_rmse
         );
         for k in 0..3 {
-            assert!(error[k].abs() <= 3.0 * sigma[k], "robot {} component {k}", i + 1);
+            assert!(
+                error[k].abs() <= 3.0 * sigma[k],
+                "robot {} component {k}",
+                i + 1
+            );
         }
         assert!(
             a.ekf_position_rmse <= 1.05 * b.ekf_position_rmse,

@@ -16,14 +16,16 @@ use comfy_table::Table;
 use locus_eval::Sample;
 use locus_logs::mrclam::Dataset;
 use locus_models::laser_wall::Segment;
-use locus_replay::{Config, Log, Report, replay};
-use serde::Serialize;
+use locus_replay::{Config, Log, Report, Start, StartedFrom, replay};
+
+mod json;
 
 use crate::metrics::{self, RunMetrics, Settings};
 use crate::output::{print_out, progress_bar};
 use crate::plot::PictureArgs;
 use crate::run::{Info, files_written};
 use crate::table::with_header;
+use json::ReplayMetrics;
 
 /// Arguments of `locus replay`.
 #[derive(ClapArgs, Debug)]
@@ -124,6 +126,12 @@ struct Common {
     /// metrics.json), and the smoothed trajectory in smoothed.csv.
     #[arg(long)]
     smooth: bool,
+    /// Find the initial pose from the first sightings (the landmarks seen
+    /// in the first seconds, carried back by dead reckoning and fitted to
+    /// the map), even when the log has a start pose or ground truth. A log
+    /// with neither always starts this way.
+    #[arg(long)]
+    start_from_sightings: bool,
     /// Pictures.
     #[command(flatten)]
     pictures: PictureArgs,
@@ -146,6 +154,11 @@ impl Common {
             gate: (!self.no_gate).then_some(self.gate),
             robust_dof: (!self.no_robust).then_some(self.robust_dof),
             smooth: self.smooth,
+            start: if self.start_from_sightings {
+                Start::Sightings
+            } else {
+                Start::Log
+            },
             calibration: locus_replay::Calibration {
                 initial: [self.v_scale, self.omega_scale, 0.0, 0.0],
                 ..locus_replay::Calibration::default()
@@ -396,6 +409,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
         log.duration(),
         report.compared
     );
+    text.push_str(&started_from(&report.started_from));
     text.push_str(&crate::table::summary(&info, &report.summary));
     text.push_str(&format!("{}\n", honesty_table(&report)));
     text.push_str(estimated);
@@ -407,6 +421,35 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
         text.push_str(&format!("smoothed: {}\n", smoothed_path.display()));
     }
     print_out(&text)
+}
+
+/// Where the initial pose came from, one line (with the fix's figures when
+/// the sightings gave it).
+fn started_from(from: &StartedFrom) -> String {
+    match from {
+        StartedFrom::Log => "initial pose: the log's start record\n".to_string(),
+        StartedFrom::Truth => {
+            "initial pose: the ground truth at the first odometry time\n".to_string()
+        }
+        StartedFrom::Sightings(f) => {
+            let sd = |k: usize| f.covariance[(k, k)].sqrt();
+            format!(
+                "initial pose from the first {} sightings ({:.1} s; {} agree, on {} landmarks, \
+                 rms {:.3} m): x {:.3} +- {:.3} m, y {:.3} +- {:.3} m, heading {:.3} +- {:.3} rad (1 sigma)\n",
+                f.sightings,
+                f.span,
+                f.inliers,
+                f.landmarks,
+                f.rms,
+                f.pose[0],
+                sd(0),
+                f.pose[1],
+                sd(1),
+                f.pose[2],
+                sd(2)
+            )
+        }
+    }
 }
 
 /// Where a sighting is in its log: `name:line`, or `name` alone when the
@@ -578,71 +621,4 @@ fn counts_table(cfg: &Config, r: &Report) -> Table {
         t.add_row(vec![k.to_string(), v]);
     }
     t
-}
-
-/// The replay's fields of `metrics.json`, after the summary's: its
-/// settings and counts.
-#[derive(Serialize)]
-struct ReplayMetrics {
-    /// Always `replay`.
-    source: &'static str,
-    /// Chi-square gate confidence; `null` without a gate.
-    gate_confidence: Option<f64>,
-    q_v_m2_per_s: f64,
-    q_omega_rad2_per_s: f64,
-    sigma_range_m: f64,
-    sigma_bearing_rad: f64,
-    /// The filter's final `(mean, std)` of the forward-speed scale, the
-    /// turn-rate scale, the turn-rate bias (rad/s), the bearing bias (rad).
-    calibration: [(f64, f64); 4],
-    /// The smoother's summary (with `--smooth`).
-    smoothed: Option<locus_eval::Summary>,
-    /// The odometry delay replayed with, s.
-    odometry_delay_s: f64,
-    events: usize,
-    compared: usize,
-    sightings: usize,
-    applied: usize,
-    gated: usize,
-    gated_share: f64,
-    inflations: usize,
-    robot_sightings: usize,
-    unknown_sightings: usize,
-    not_in_map: usize,
-    late: usize,
-    too_late: usize,
-    /// Sightings the filter could not use (refused, listed with their line).
-    unusable: usize,
-    /// Sightings refused for an implausible time stamp.
-    implausible_time: usize,
-}
-
-impl ReplayMetrics {
-    fn new(cfg: &Config, r: &Report) -> Self {
-        Self {
-            source: "replay",
-            gate_confidence: cfg.gate,
-            q_v_m2_per_s: cfg.q_v,
-            q_omega_rad2_per_s: cfg.q_omega,
-            sigma_range_m: cfg.sigma_range,
-            sigma_bearing_rad: cfg.sigma_bearing,
-            calibration: r.calibration,
-            smoothed: r.smoothed,
-            odometry_delay_s: cfg.odometry_delay,
-            events: r.steps,
-            compared: r.compared,
-            sightings: r.sightings,
-            applied: r.applied,
-            gated: r.gated,
-            gated_share: r.gated_share(),
-            inflations: r.inflations,
-            robot_sightings: r.robot_sightings,
-            unknown_sightings: r.unknown_sightings,
-            not_in_map: r.not_in_map,
-            late: r.late,
-            too_late: r.too_late,
-            unusable: r.unusable,
-            implausible_time: r.implausible_time,
-        }
-    }
 }

@@ -1,0 +1,120 @@
+//! `metrics.json`'s replay fields: the settings, the counts and where the
+//! initial pose came from.
+
+use locus_replay::{Config, Report, StartedFrom};
+use serde::Serialize;
+
+/// The replay's fields of `metrics.json`, after the summary's: its
+/// settings and counts.
+#[derive(Serialize)]
+pub(super) struct ReplayMetrics {
+    /// Always `replay`.
+    source: &'static str,
+    /// Chi-square gate confidence; `null` without a gate.
+    gate_confidence: Option<f64>,
+    q_v_m2_per_s: f64,
+    q_omega_rad2_per_s: f64,
+    sigma_range_m: f64,
+    sigma_bearing_rad: f64,
+    /// The filter's final `(mean, std)` of the forward-speed scale, the
+    /// turn-rate scale, the turn-rate bias (rad/s), the bearing bias (rad).
+    calibration: [(f64, f64); 4],
+    /// The smoother's summary (with `--smooth`).
+    smoothed: Option<locus_eval::Summary>,
+    /// The odometry delay replayed with, s.
+    odometry_delay_s: f64,
+    /// Where the initial pose came from.
+    start: StartMetrics,
+    events: usize,
+    compared: usize,
+    sightings: usize,
+    applied: usize,
+    gated: usize,
+    gated_share: f64,
+    inflations: usize,
+    robot_sightings: usize,
+    unknown_sightings: usize,
+    not_in_map: usize,
+    late: usize,
+    too_late: usize,
+    /// Sightings the filter could not use (refused, listed with their line).
+    unusable: usize,
+    /// Sightings refused for an implausible time stamp.
+    implausible_time: usize,
+}
+
+impl ReplayMetrics {
+    pub(super) fn new(cfg: &Config, r: &Report) -> Self {
+        Self {
+            source: "replay",
+            gate_confidence: cfg.gate,
+            q_v_m2_per_s: cfg.q_v,
+            q_omega_rad2_per_s: cfg.q_omega,
+            sigma_range_m: cfg.sigma_range,
+            sigma_bearing_rad: cfg.sigma_bearing,
+            calibration: r.calibration,
+            smoothed: r.smoothed,
+            odometry_delay_s: cfg.odometry_delay,
+            start: StartMetrics::new(&r.started_from),
+            events: r.steps,
+            compared: r.compared,
+            sightings: r.sightings,
+            applied: r.applied,
+            gated: r.gated,
+            gated_share: r.gated_share(),
+            inflations: r.inflations,
+            robot_sightings: r.robot_sightings,
+            unknown_sightings: r.unknown_sightings,
+            not_in_map: r.not_in_map,
+            late: r.late,
+            too_late: r.too_late,
+            unusable: r.unusable,
+            implausible_time: r.implausible_time,
+        }
+    }
+}
+
+/// `metrics.json`'s `start`: where the initial pose came from (`log`,
+/// `truth` or `sightings`), and for `sightings` the fix.
+#[derive(Serialize)]
+struct StartMetrics {
+    from: &'static str,
+    /// x, y (m) and heading (rad) at the first odometry time.
+    pose: Option<[f64; 3]>,
+    /// Their standard deviations (m, m, rad).
+    std: Option<[f64; 3]>,
+    sightings: Option<usize>,
+    inliers: Option<usize>,
+    landmarks: Option<usize>,
+    span_s: Option<f64>,
+    rms_m: Option<f64>,
+}
+
+impl StartMetrics {
+    fn new(from: &StartedFrom) -> Self {
+        let none = |from| Self {
+            from,
+            pose: None,
+            std: None,
+            sightings: None,
+            inliers: None,
+            landmarks: None,
+            span_s: None,
+            rms_m: None,
+        };
+        match from {
+            StartedFrom::Log => none("log"),
+            StartedFrom::Truth => none("truth"),
+            StartedFrom::Sightings(f) => Self {
+                from: "sightings",
+                pose: Some([f.pose[0], f.pose[1], f.pose[2]]),
+                std: Some([0, 1, 2].map(|k| f.covariance[(k, k)].sqrt())),
+                sightings: Some(f.sightings),
+                inliers: Some(f.inliers),
+                landmarks: Some(f.landmarks),
+                span_s: Some(f.span),
+                rms_m: Some(f.rms),
+            },
+        }
+    }
+}
