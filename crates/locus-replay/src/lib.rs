@@ -40,6 +40,10 @@
 //!   rejections the covariance is multiplied by [`Config::inflation`] and
 //!   the sighting is tried again (and again at each further rejection, so
 //!   the inflation compounds until a sighting fits).
+//! * **Initial pose.** The log's start pose, else the ground truth at the
+//!   first odometry time, else the pose the first sightings fix
+//!   ([`initial`]); [`Config::start`] can ask for the last whatever the
+//!   log gives. [`Report::started_from`] says which.
 //! * **Ground truth.** Each event's estimate is compared with the ground
 //!   truth interpolated at its time (events where the truth has a gap wider
 //!   than [`Config::truth_max_gap`] or has ended are not compared), beside

@@ -26,7 +26,8 @@ pub struct Log {
     /// Ground truth (empty if the log has none).
     pub truth: Groundtruth,
     /// The initial pose; if `None`, the ground truth at the first odometry
-    /// time is used.
+    /// time is used, and without that the pose the first sightings fix
+    /// ([`crate::initial`]).
     pub start: Option<TruthPose>,
     /// Sightings of other robots, left out of [`Log::sightings`] (they are
     /// not landmarks).
