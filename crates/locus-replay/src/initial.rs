@@ -292,3 +292,31 @@ fn fit(pairs: &[Pair], t0: f64) -> Option<Fix> {
         rms,
     })
 }
+
+impl Fix {
+    /// How far `pose` (x, y in m, heading in rad; with standard deviations
+    /// `std`) lies from this fix: the squared Mahalanobis distance under
+    /// both covariances, the heading difference wrapped. Above the
+    /// chi-square(3) quantile [`DISAGREE`], a start pose given with the log
+    /// contradicts its own first sightings.
+    #[must_use]
+    pub fn distance2(&self, pose: &Vector3<f64>, std: [f64; 3]) -> f64 {
+        let d = Vector3::new(
+            pose[0] - self.pose[0],
+            pose[1] - self.pose[1],
+            wrap_angle(pose[2] - self.pose[2]),
+        );
+        let c = self.covariance
+            + Matrix3::from_diagonal(&Vector3::new(
+                std[0] * std[0],
+                std[1] * std[1],
+                std[2] * std[2],
+            ));
+        c.try_inverse()
+            .map_or(f64::INFINITY, |inv| (d.transpose() * inv * d)[0])
+    }
+}
+
+/// The 99.9 % quantile of chi-square with 3 degrees of freedom: a
+/// [`Fix::distance2`] above it is a disagreement.
+pub const DISAGREE: f64 = 16.266_236_196_238_134;

@@ -32,7 +32,7 @@ fn without(text: &str, drop: &[&str]) -> String {
 }
 
 #[test]
-fn a_log_with_no_start_and_no_truth_replays_from_where_its_sightings_put_it() {
+fn a_log_with_no_start_replays_from_its_sightings_and_a_wrong_start_is_named() {
     let data = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../../../shared/data/mrclam/MRCLAM_Dataset6"
@@ -108,5 +108,46 @@ fn a_log_with_no_start_and_no_truth_replays_from_where_its_sightings_put_it() {
         from_sightings["start"]["pose"], m["start"]["pose"],
         "the same fix with or without the truth in the log"
     );
+
+    // A start record that contradicts the first sightings is named; one
+    // that agrees is not.
+    let fix = &m["start"]["pose"];
+    let t0 = bare_text_first_odometry(&fs::read_to_string(&bare).unwrap());
+    for (name, dx, dtheta, warned) in [("wrong", 3.0, 1.5, true), ("right", 0.0, 0.0, false)] {
+        let file = path(&format!("{name}.csv"));
+        let start = format!(
+            "start,{t0},{},{},{}\n",
+            fix[0].as_f64().unwrap() + dx,
+            fix[1].as_f64().unwrap(),
+            fix[2].as_f64().unwrap() + dtheta
+        );
+        fs::write(&file, start + &fs::read_to_string(&bare).unwrap()).unwrap();
+        let out = ok(locus(
+            &[
+                &["replay", "csv", &s(&file), "--out", &s(&path(name))][..],
+                &fixed,
+            ]
+            .concat(),
+        ));
+        assert_eq!(
+            out.contains("warning: the log's start pose"),
+            warned,
+            "{name}: {out}"
+        );
+        assert_eq!(metrics(&path(name))["start"]["from"], "log");
+    }
     let _ = fs::remove_dir_all(&dir);
+}
+
+/// The time of the first odometry line, s.
+fn bare_text_first_odometry(text: &str) -> f64 {
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("odometry,"))
+        .expect("odometry");
+    line.split(',')
+        .nth(1)
+        .expect("time")
+        .parse()
+        .expect("number")
 }

@@ -410,6 +410,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
         report.compared
     );
     text.push_str(&started_from(&report.started_from));
+    text.push_str(&start_check(log, cfg, &report.started_from));
     text.push_str(&crate::table::summary(&info, &report.summary));
     text.push_str(&format!("{}\n", honesty_table(&report)));
     text.push_str(estimated);
@@ -450,6 +451,35 @@ fn started_from(from: &StartedFrom) -> String {
             )
         }
     }
+}
+
+/// A warning when the log's start pose contradicts where its first
+/// sightings put the robot (beyond the 99.9 % chi-square(3) bound of both
+/// uncertainties), else nothing.
+fn start_check(log: &Log, cfg: &Config, from: &StartedFrom) -> String {
+    let (StartedFrom::Log, Some(start)) = (from, log.start) else {
+        return String::new();
+    };
+    let Some(fix) = locus_replay::initial::from_sightings(log, cfg) else {
+        return String::new();
+    };
+    let pose = locus_core::nalgebra::Vector3::new(start.x, start.y, start.theta);
+    let d2 = fix.distance2(&pose, cfg.initial_std);
+    if d2 <= locus_replay::initial::DISAGREE {
+        return String::new();
+    }
+    format!(
+        "warning: the log's start pose ({:.3} m, {:.3} m, {:.3} rad) is {:.1} sigma from where its first \
+         sightings put the robot ({:.3} m, {:.3} m, {:.3} rad); if the start record is wrong, \
+         replay with --start-from-sightings\n",
+        start.x,
+        start.y,
+        start.theta,
+        d2.sqrt(),
+        fix.pose[0],
+        fix.pose[1],
+        fix.pose[2]
+    )
 }
 
 /// Where a sighting is in its log: `name:line`, or `name` alone when the
