@@ -110,7 +110,7 @@ impl Default for Calibration {
 
 impl Default for Config {
     /// Values for MRCLAM-like logs (commanded velocities, a camera's range
-    /// and bearing): `q_v` 0.01 m^2/s, `q_omega` 0.02 rad^2/s, range 1 m,
+    /// and bearing): `q_v` 0.002 m^2/s, `q_omega` 0.002 rad^2/s, range 1 m,
     /// bearing 0.01 rad; Student-t sightings with 4 degrees of freedom; a
     /// 99 % gate, inflation by 4 after 5 consecutive rejections; the
     /// calibration states of [`Calibration::default`]; a 1 s history.
@@ -122,12 +122,18 @@ impl Default for Config {
     /// landmark 13 reads 0.42 m short for the whole of 612-624 s while
     /// landmarks 6-8 read 0.1 m long), so a filter that takes them as
     /// independent at their frame-to-frame spread is over-confident. The
-    /// bearings are tight and independent (0.004-0.007 rad). See
-    /// docs/replay.md for the measurements.
+    /// bearings are tight and independent (0.004-0.007 rad).
+    ///
+    /// The process noise is what [`crate::drift::process_noise`] finds
+    /// from the sightings alone (how fast dead reckoning drifts between
+    /// pose fixes), as the median over robots 1-3 of MRCLAM dataset 6
+    /// (`q_v` 0.0018, 0.0053, 0.0019 m^2/s; `q_omega` 0.0017, 0.0019,
+    /// 0.0003 rad^2/s), to one significant digit. See docs/replay.md for
+    /// the measurements.
     fn default() -> Self {
         Self {
-            q_v: 0.01,
-            q_omega: 0.02,
+            q_v: 0.002,
+            q_omega: 0.002,
             sigma_range: 1.0,
             sigma_bearing: 0.01,
             calibration: Calibration::default(),

@@ -90,7 +90,7 @@ struct Pair {
 #[must_use]
 pub fn from_sightings(log: &Log, cfg: &Config) -> Option<Fix> {
     let t0 = log.odometry.first()?.time;
-    let pairs = pairs(log, cfg, t0);
+    let pairs = pairs(log, cfg, t0, f64::INFINITY);
     let first = pairs.first()?.time;
     WINDOWS.iter().find_map(|w| {
         let n = pairs
@@ -102,16 +102,26 @@ pub fn from_sightings(log: &Log, cfg: &Config) -> Option<Fix> {
     })
 }
 
+/// The pose at time `from` (s) that the sightings taken from `from` to
+/// `to` fix, as [`from_sightings`] finds the initial pose (at most
+/// [`MAX_SIGHTINGS`] of them), or `None`.
+#[must_use]
+pub fn fix_between(log: &Log, cfg: &Config, from: f64, to: f64) -> Option<Fix> {
+    let pairs = pairs(log, cfg, from, to);
+    fit(&pairs[..pairs.len().min(MAX_SIGHTINGS)], from)
+}
+
 /// The usable sightings (landmark in the map, finite, in range, from the
 /// first odometry time on) in time order, with their landmarks carried to
 /// the start frame by dead reckoning on the logged odometry (its delay and
 /// initial calibration as `cfg` sets them).
-fn pairs(log: &Log, cfg: &Config, t0: f64) -> Vec<Pair> {
+fn pairs(log: &Log, cfg: &Config, t0: f64, to: f64) -> Vec<Pair> {
     let mut sightings: Vec<_> = log
         .sightings
         .iter()
         .filter(|s| {
             s.time >= t0
+                && s.time <= to
                 && s.range.is_finite()
                 && s.bearing.is_finite()
                 && s.range <= cfg.max_range

@@ -56,6 +56,7 @@
 extern crate alloc;
 
 mod config;
+pub mod drift;
 pub mod initial;
 pub mod log;
 pub mod noise;

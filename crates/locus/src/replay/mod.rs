@@ -77,11 +77,11 @@ struct Common {
     #[arg(long)]
     no_gate: bool,
     /// Power spectral density of the forward-speed noise, m^2/s.
-    /// Default: the log's `noise` record, else 0.01.
+    /// Default: the log's `noise` record, else 0.002.
     #[arg(long, value_parser = crate::args::positive_f64)]
     q_v: Option<f64>,
     /// Power spectral density of the turn-rate noise, rad^2/s.
-    /// Default: the log's `noise` record, else 0.02.
+    /// Default: the log's `noise` record, else 0.002.
     #[arg(long, value_parser = crate::args::positive_f64)]
     q_omega: Option<f64>,
     /// Range noise standard deviation, m.

@@ -1,0 +1,202 @@
+//! Process noise from how fast dead reckoning drifts between pose fixes of
+//! the sightings alone (no ground truth, no filter in the loop).
+//!
+//! Every [`STEP`] seconds, the sightings of the next [`FIX_WINDOW`] seconds
+//! fix a pose ([`crate::initial::fix_between`]); fixes whose standard
+//! deviations exceed [`MAX_FIX_STD`] are left out. From each fix, dead
+//! reckoning on the logged odometry (the log's delay, the scale factors a
+//! filter replay estimated) runs to the fix [`INTERVALS`] later, and the
+//! difference is split into the along-track error (in the first fix's
+//! heading) and the heading error. A white velocity noise of power spectral
+//! density `q` makes such an error's variance grow as `q T` over an
+//! interval `T`, plus the two fixes' own errors, which do not grow with
+//! `T`. So the slope of the variance (taken robustly, 1.4826 times the
+//! median absolute deviation, squared) against `T`, fitted by least
+//! squares over the intervals, is `q_v` (along-track) and `q_omega`
+//! (heading), and the intercept absorbs the fixes' errors. This is the
+//! idea of the Allan-variance identification of inertial sensor noise
+//! (IEEE Std 952-1997, annex C; El-Sheimy, Hou and Niu, "Analysis and
+//! modeling of inertial sensors using Allan variance", IEEE Trans.
+//! Instrumentation and Measurement 57(1), 2008), applied to odometry
+//! between absolute fixes.
+//!
+//! Unlike the innovation likelihood ([`crate::noise`]), it looks at the
+//! errors over the seconds-long gaps between sightings, which is where a
+//! filter's covariance must grow as fast as its errors; unlike
+//! expectation-maximisation over a smoother, it does not see the
+//! trajectory through the filter's own process noise. Per robot it is
+//! noisy (a few hundred fixes); `Config::default`'s values are its median
+//! over robots 1-3 of MRCLAM dataset 6 (docs/replay.md).
+
+use locus_core::nalgebra::{Vector2, Vector3};
+use locus_core::{MotionModel, wrap_angle};
+use locus_models::unicycle::{Unicycle, Velocities};
+
+use crate::initial::{Fix, fix_between};
+use crate::{Config, Error, Log, replay};
+
+/// Seconds between the starts of two fixes.
+pub const STEP: f64 = 1.0;
+/// Seconds of sightings one fix uses.
+pub const FIX_WINDOW: f64 = 2.0;
+/// Largest standard deviation of a fix kept: x and y (m), heading (rad).
+pub const MAX_FIX_STD: [f64; 3] = [0.5, 0.5, 0.1];
+/// The intervals between fixes, s.
+pub const INTERVALS: [f64; 5] = [2.0, 4.0, 8.0, 16.0, 32.0];
+/// Fewest fix pairs an interval needs to count.
+pub const MIN_PAIRS: usize = 10;
+
+/// One interval's figures.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Interval {
+    /// The interval, s.
+    pub seconds: f64,
+    /// Robust variance of the along-track error, m^2.
+    pub along: f64,
+    /// Robust variance of the heading error, rad^2.
+    pub heading: f64,
+    /// Fix pairs that far apart.
+    pub pairs: usize,
+}
+
+/// The estimate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Drift {
+    /// Power spectral density of the forward-speed noise, m^2/s (the
+    /// slope of the along-track variance).
+    pub q_v: f64,
+    /// Power spectral density of the turn-rate noise, rad^2/s.
+    pub q_omega: f64,
+    /// Fixes kept.
+    pub fixes: usize,
+    /// The intervals with enough pairs.
+    pub intervals: Vec<Interval>,
+}
+
+/// Estimates the process noise of `log` (see the module documentation),
+/// with `cfg`'s odometry delay; `q_v` and `q_omega` are NaN if fewer than
+/// two intervals have [`MIN_PAIRS`] pairs.
+///
+/// # Errors
+/// The filter replay's errors.
+pub fn process_noise(log: &Log, cfg: &Config) -> Result<Drift, Error> {
+    let plain = Config {
+        smooth: false,
+        evaluate: false,
+        ..*cfg
+    };
+    let calibration = replay(log, &plain, |_| {})?.calibration;
+    let (s_v, s_omega) = (calibration[0].0, calibration[1].0);
+    let mut fixing = plain;
+    fixing.calibration.initial[0] = s_v;
+    fixing.calibration.initial[1] = s_omega;
+    let (Some(first), Some(last)) = (log.odometry.first(), log.odometry.last()) else {
+        return Err(Error::NoOdometry);
+    };
+    let mut fixes: Vec<(f64, Fix)> = Vec::new();
+    let mut t = first.time;
+    while t + FIX_WINDOW < last.time {
+        if let Some(f) = fix_between(log, &fixing, t, t + FIX_WINDOW) {
+            let ok = (0..3).all(|k| f.covariance[(k, k)].sqrt() < MAX_FIX_STD[k]);
+            if ok {
+                fixes.push((t, f));
+            }
+        }
+        t += STEP;
+    }
+    let mut intervals = Vec::new();
+    for seconds in INTERVALS {
+        let (mut along, mut heading) = (Vec::new(), Vec::new());
+        for (ta, a) in &fixes {
+            let target = ta + seconds;
+            let Some((_, b)) = fixes
+                .iter()
+                .find(|(tb, _)| (tb - target).abs() < 0.5 * STEP)
+            else {
+                continue;
+            };
+            let end = dead_reckon(log, &fixing, a.pose, *ta, target);
+            let (s, c) = a.pose[2].sin_cos();
+            along.push((b.pose[0] - end[0]) * c + (b.pose[1] - end[1]) * s);
+            heading.push(wrap_angle(b.pose[2] - end[2]));
+        }
+        if along.len() >= MIN_PAIRS {
+            intervals.push(Interval {
+                seconds,
+                pairs: along.len(),
+                along: robust_variance(along),
+                heading: robust_variance(heading),
+            });
+        }
+    }
+    Ok(Drift {
+        q_v: slope(&intervals, |i| i.along),
+        q_omega: slope(&intervals, |i| i.heading),
+        fixes: fixes.len(),
+        intervals,
+    })
+}
+
+/// Dead reckoning from `pose` at `from` to `to` (s) on the logged odometry,
+/// with `cfg`'s delay and initial scale factors and turn-rate bias.
+fn dead_reckon(log: &Log, cfg: &Config, pose: Vector3<f64>, from: f64, to: f64) -> Vector3<f64> {
+    let [s_v, s_omega, b_omega, _] = cfg.calibration.initial;
+    let model = Unicycle::new(0.0, 0.0);
+    let (mut x, mut t, mut v, mut omega) = (pose, from, 0.0, 0.0);
+    let mut go = |x: &mut Vector3<f64>, until: f64, v: f64, omega: f64| {
+        if until > t {
+            let u = Velocities {
+                v,
+                omega,
+                dt: until - t,
+            };
+            *x = model.f(x, &u, &Vector2::zeros());
+            t = until;
+        }
+    };
+    let start = log
+        .odometry
+        .partition_point(|o| o.time + cfg.odometry_delay <= from);
+    if let Some(o) = start.checked_sub(1).map(|i| &log.odometry[i]) {
+        v = s_v * o.v;
+        omega = s_omega * o.omega + b_omega;
+    }
+    for o in &log.odometry[start..] {
+        let at = o.time + cfg.odometry_delay;
+        if at >= to {
+            break;
+        }
+        go(&mut x, at, v, omega);
+        v = s_v * o.v;
+        omega = s_omega * o.omega + b_omega;
+    }
+    go(&mut x, to, v, omega);
+    x
+}
+
+/// 1.4826 times the median absolute deviation from the median, squared.
+fn robust_variance(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let median = v[v.len() / 2];
+    let mut dev: Vec<f64> = v.iter().map(|x| (x - median).abs()).collect();
+    dev.sort_by(f64::total_cmp);
+    (1.4826 * dev[dev.len() / 2]).powi(2)
+}
+
+/// Least-squares slope of `value` against the interval (NaN with fewer
+/// than two intervals).
+#[allow(clippy::cast_precision_loss)]
+fn slope(intervals: &[Interval], value: impl Fn(&Interval) -> f64) -> f64 {
+    if intervals.len() < 2 {
+        return f64::NAN;
+    }
+    let n = intervals.len() as f64;
+    let mx = intervals.iter().map(|i| i.seconds).sum::<f64>() / n;
+    let my = intervals.iter().map(&value).sum::<f64>() / n;
+    let num: f64 = intervals
+        .iter()
+        .map(|i| (i.seconds - mx) * (value(i) - my))
+        .sum();
+    let den: f64 = intervals.iter().map(|i| (i.seconds - mx).powi(2)).sum();
+    num / den
+}
