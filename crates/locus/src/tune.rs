@@ -39,12 +39,15 @@ pub struct Args {
     /// Robots reported with the tuned values but not tuned on.
     #[arg(long, value_delimiter = ',', default_values_t = [4u32, 5])]
     held_out: Vec<u32>,
-    /// How to estimate: `em`, the replay's estimate from the logs alone
+    /// How to estimate: `drift`, the process noise from how fast dead
+    /// reckoning drifts between pose fixes of the sightings and the
+    /// odometry delay, from the logs alone (how the replay's defaults were
+    /// made); `em`, the noise estimate from the logs alone
     /// (EM over the smoother and innovation likelihood); `nll`, Nelder-Mead
     /// on the innovations' negative log-likelihood (no ground truth
     /// needed); `truth`, Nelder-Mead on the summed position RMSE against
     /// the ground truth.
-    #[arg(long, value_enum, default_value_t = Objective::Em)]
+    #[arg(long, value_enum, default_value_t = Objective::Drift)]
     objective: Objective,
     /// Nelder-Mead iterations at most.
     #[arg(long, default_value_t = 150)]
@@ -54,6 +57,9 @@ pub struct Args {
 /// The score `locus tune` minimises.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 enum Objective {
+    /// `locus_replay::drift::process_noise` and the odometry delay on each
+    /// robot, medians combined.
+    Drift,
     /// `locus_replay::noise::estimate` on each robot, medians combined.
     Em,
     /// Innovations' negative log-likelihood.
@@ -111,7 +117,7 @@ impl CostFunction for Problem<'_> {
         for log in self.logs {
             let r = replay(log, &cfg, |_| {})?;
             sum += match self.objective {
-                Objective::Nll | Objective::Em => r.innovation_nll,
+                Objective::Nll | Objective::Em | Objective::Drift => r.innovation_nll,
                 Objective::Truth => r.summary.ekf_position_rmse,
             };
         }
@@ -136,6 +142,7 @@ pub fn run(args: &Args) -> Result<()> {
     let held_logs = read(&args.held_out)?;
     let start = Config::default();
     let (tuned, how) = match args.objective {
+        Objective::Drift => drift_on(&tune_logs, &start)?,
         Objective::Em => estimate_on(&tune_logs, &start)?,
         Objective::Nll | Objective::Truth => nelder_mead(args, &tune_logs, &start)?,
     };
@@ -270,6 +277,42 @@ fn worst(shares: &[f64; 3]) -> f64 {
 fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(f64::total_cmp);
     values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// The odometry delay and then `locus_replay::drift::process_noise` on
+/// each log from `start`, combined by the median of each; and how it was
+/// reached.
+fn drift_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
+    let bar = progress_bar(
+        logs.len() as u64,
+        "{pos}/{len} logs estimated, {elapsed} elapsed",
+    )?;
+    let mut each = Vec::with_capacity(logs.len());
+    for log in logs {
+        let (delay, _) = locus_replay::noise::estimate_delay(log, start)
+            .with_context(|| format!("estimating the odometry delay of {}", log.name))?;
+        let cfg = Config {
+            odometry_delay: delay,
+            ..*start
+        };
+        let d = locus_replay::drift::process_noise(log, &cfg)
+            .with_context(|| format!("estimating the process noise of {}", log.name))?;
+        each.push((d.q_v, d.q_omega, delay));
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let tuned = Config {
+        q_v: median(each.iter().map(|e| e.0).collect()),
+        q_omega: median(each.iter().map(|e| e.1).collect()),
+        odometry_delay: median(each.iter().map(|e| e.2).collect()),
+        ..*start
+    };
+    Ok((
+        tuned,
+        "process noise from the drift between pose fixes of the sightings, and the odometry \
+         delay, each robot; medians"
+            .to_string(),
+    ))
 }
 
 /// `locus_replay::noise::estimate` on each log from `start`, combined by
