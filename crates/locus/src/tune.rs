@@ -279,16 +279,26 @@ fn median(mut values: Vec<f64>) -> f64 {
     values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
-/// The odometry delay and then `locus_replay::drift::process_noise` on
-/// each log from `start`, combined by the median of each; and how it was
-/// reached.
-fn drift_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
+/// `estimate` on each of `logs`, in order, with a progress bar.
+fn each_log<T>(logs: &[Log], estimate: impl Fn(&Log) -> Result<T>) -> Result<Vec<T>> {
     let bar = progress_bar(
         logs.len() as u64,
         "{pos}/{len} logs estimated, {elapsed} elapsed",
     )?;
     let mut each = Vec::with_capacity(logs.len());
     for log in logs {
+        each.push(estimate(log)?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(each)
+}
+
+/// The odometry delay and then `locus_replay::drift::process_noise` on
+/// each log from `start`, combined by the median of each; and how it was
+/// reached.
+fn drift_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
+    let each = each_log(logs, |log| {
         let (delay, _) = locus_replay::noise::estimate_delay(log, start)
             .with_context(|| format!("estimating the odometry delay of {}", log.name))?;
         let cfg = Config {
@@ -297,10 +307,8 @@ fn drift_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
         };
         let d = locus_replay::drift::process_noise(log, &cfg)
             .with_context(|| format!("estimating the process noise of {}", log.name))?;
-        each.push((d.q_v, d.q_omega, delay));
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
+        Ok((d.q_v, d.q_omega, delay))
+    })?;
     let tuned = Config {
         q_v: median(each.iter().map(|e| e.0).collect()),
         q_omega: median(each.iter().map(|e| e.1).collect()),
@@ -318,18 +326,11 @@ fn drift_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
 /// `locus_replay::noise::estimate` on each log from `start`, combined by
 /// the median of each estimated value; and how it was reached.
 fn estimate_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
-    let bar = progress_bar(
-        logs.len() as u64,
-        "{pos}/{len} logs estimated, {elapsed} elapsed",
-    )?;
-    let mut each = Vec::with_capacity(logs.len());
-    for log in logs {
-        let e = locus_replay::noise::estimate(log, start)
-            .with_context(|| format!("estimating the noise of {}", log.name))?;
-        each.push(e.config);
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
+    let each = each_log(logs, |log| {
+        Ok(locus_replay::noise::estimate(log, start)
+            .with_context(|| format!("estimating the noise of {}", log.name))?
+            .config)
+    })?;
     let pick = |f: fn(&Config) -> f64| median(each.iter().map(f).collect());
     let tuned = Config {
         q_v: pick(|c| c.q_v),
