@@ -552,10 +552,10 @@ impl<T: Scalar, const N: usize, const H: usize, E: Event, X: Copy, const W: usiz
         let after = |(e, _): &Final<T, N, E, X>| e.order(&event) == Ordering::Greater;
         if n < H && (n == 0 || !self.entry(n - 1).is_some_and(after)) {
             let at = self.index(n);
-            self.history[at] = match n {
-                0 => Some((event, self.base)),
-                _ => self.history[self.index(n - 1)],
-            };
+            match n.checked_sub(1).map(|i| self.index(i)) {
+                None => self.history[at] = Some((event, self.base)),
+                Some(k) => self.history.copy_within(k..=k, at),
+            }
             if let Some((e, track)) = self.history[at].as_mut() {
                 *e = event;
                 apply(&self.rules, track, e)?;
