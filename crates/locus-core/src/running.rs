@@ -515,12 +515,14 @@ impl<T: Scalar, const N: usize, const H: usize, E: Event, X: Copy, const W: usiz
         if self.len == 0 {
             return None;
         }
-        let oldest = *self.entry(0).filter(|(e, _)| e.time() < limit)?;
-        self.history[self.head] = None;
+        // The slot is left as it is: past the pending ones, it is not read.
+        let slot = self.history[self.head].as_ref();
+        let (event, track) = slot.filter(|(e, _)| e.time() < limit)?;
+        let event = *event;
+        self.base = *track;
         self.head = (self.head + 1) % H;
         self.len -= 1;
-        self.base = oldest.1;
-        Some(oldest)
+        Some((event, self.base))
     }
 
     /// Inserts `event` at its place in the canonical order
@@ -544,13 +546,26 @@ impl<T: Scalar, const N: usize, const H: usize, E: Event, X: Copy, const W: usiz
         mut apply: impl FnMut(&Rules<T>, &mut Track<T, N, X>, &mut E) -> Result<(), Error>,
     ) -> Result<Inserted<T, N, E, X>, Error> {
         const { assert!(H > 0, "insert needs a history: H >= 1") };
+        // In order with room: applied in place in the next free slot (on an
+        // error the slot stays free and the filter unchanged).
+        let n = self.len;
+        let after = |(e, _): &Final<T, N, E, X>| e.order(&event) == Ordering::Greater;
+        if n < H && (n == 0 || !self.entry(n - 1).is_some_and(after)) {
+            let at = self.index(n);
+            match n.checked_sub(1).map(|i| self.index(i)) {
+                None => self.history[at] = Some((event, self.base)),
+                Some(k) => self.history.copy_within(k..=k, at),
+            }
+            if let Some((e, track)) = self.history[at].as_mut() {
+                *e = event;
+                apply(&self.rules, track, e)?;
+            }
+            self.len += 1;
+            return Ok((Placement::InOrder, None));
+        }
         // The events that order after `event` start at `p`.
         let mut p = self.len;
-        while p > 0
-            && self
-                .entry(p - 1)
-                .is_some_and(|(e, _)| e.order(&event) == Ordering::Greater)
-        {
+        while p > 0 && self.entry(p - 1).is_some_and(after) {
             p -= 1;
         }
         let start = if p == 0 {

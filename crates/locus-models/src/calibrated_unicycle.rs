@@ -68,6 +68,89 @@ impl<T: Scalar> CalibratedUnicycle<T> {
     }
 }
 
+/// One prediction step with what it computed on the way: the smoother
+/// needs the Jacobian and `A P` of the very prediction the filter made.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Propagation<T: Scalar> {
+    /// The predicted mean `f(x, u, 0)`.
+    pub x: SVector<T, 7>,
+    /// The predicted covariance `A P A^T + W Q W^T` (exactly symmetric).
+    pub p: SMatrix<T, 7, 7>,
+    /// The state Jacobian `A`.
+    pub a: SMatrix<T, 7, 7>,
+    /// The product `A P`.
+    pub ap: SMatrix<T, 7, 7>,
+}
+
+impl<T: Scalar> CalibratedUnicycle<T> {
+    /// [`MotionModel::propagate`] (which is this without the by-products)
+    /// with `A` and `A P` as well, from one linearisation: `A` is the
+    /// identity except the pose rows, which reach only heading and
+    /// calibration columns; `W` maps the two velocity noises into the pose
+    /// and each random walk onto its own state. About a sixth of the dense
+    /// products' work.
+    #[inline]
+    pub fn propagate_linearized(
+        &self,
+        x: &SVector<T, 7>,
+        u: &Velocities<T>,
+        p: &SMatrix<T, 7, 7>,
+    ) -> Propagation<T> {
+        let (fx, a, w) = self.linearize(x, u);
+        // B = A P: rows 0-2 are P's plus their off-identity terms.
+        let mut b = *p;
+        for r in 0..3 {
+            for c in 0..7 {
+                let mut v = p[(r, c)];
+                for k in 2..=OMEGA_BIAS {
+                    if k != r {
+                        v += a[(r, k)] * p[(k, c)];
+                    }
+                }
+                b[(r, c)] = v;
+            }
+        }
+        // P- = B A^T: columns 0-2 likewise; then symmetric by construction
+        // of the lower triangle mirrored.
+        let mut out = b;
+        for r in 0..7 {
+            for c in 0..3 {
+                let mut v = b[(r, c)];
+                for k in 2..=OMEGA_BIAS {
+                    if k != c {
+                        v += b[(r, k)] * a[(c, k)];
+                    }
+                }
+                out[(r, c)] = v;
+            }
+        }
+        // W Q W^T: the velocity noises into the pose block, the walks on
+        // the calibration diagonal.
+        let q = self.noise_cov(u);
+        for r in 0..3 {
+            for c in 0..3 {
+                out[(r, c)] +=
+                    w[(r, 0)] * q[(0, 0)] * w[(c, 0)] + w[(r, 1)] * q[(1, 1)] * w[(c, 1)];
+            }
+        }
+        for i in 0..4 {
+            out[(V_SCALE + i, V_SCALE + i)] += q[(2 + i, 2 + i)];
+        }
+        // Exactly symmetric: the upper triangle from the lower.
+        for r in 0..7 {
+            for c in (r + 1)..7 {
+                out[(r, c)] = out[(c, r)];
+            }
+        }
+        Propagation {
+            x: fx,
+            p: out,
+            a,
+            ap: b,
+        }
+    }
+}
+
 /// The pose part's model: white noise only; its variances are set per step.
 fn pose_model<T: Scalar>() -> Unicycle<T> {
     Unicycle::new(T::zero(), T::zero())
@@ -147,10 +230,8 @@ impl<T: Scalar> MotionModel<T, 7, 6> for CalibratedUnicycle<T> {
         u.v.is_finite() && u.omega.is_finite() && u.dt.is_finite() && u.dt > T::zero()
     }
 
-    /// `A P A^T + W Q W^T` with `A`'s structure: the identity except the
-    /// pose rows, which reach only heading and calibration columns; `W`
-    /// maps the two velocity noises into the pose and each random walk
-    /// onto its own state. About a sixth of the dense products' work.
+    /// `A P A^T + W Q W^T` with `A`'s structure (see
+    /// [`CalibratedUnicycle::propagate_linearized`]).
     #[inline]
     fn propagate(
         &self,
@@ -158,53 +239,8 @@ impl<T: Scalar> MotionModel<T, 7, 6> for CalibratedUnicycle<T> {
         u: &Velocities<T>,
         p: &SMatrix<T, 7, 7>,
     ) -> (SVector<T, 7>, SMatrix<T, 7, 7>) {
-        let (fx, a, w) = self.linearize(x, u);
-        // B = A P: rows 0-2 are P's plus their off-identity terms.
-        let mut b = *p;
-        for r in 0..3 {
-            for c in 0..7 {
-                let mut v = p[(r, c)];
-                for k in 2..=OMEGA_BIAS {
-                    if k != r {
-                        v += a[(r, k)] * p[(k, c)];
-                    }
-                }
-                b[(r, c)] = v;
-            }
-        }
-        // P- = B A^T: columns 0-2 likewise; then symmetric by construction
-        // of the lower triangle mirrored.
-        let mut out = b;
-        for r in 0..7 {
-            for c in 0..3 {
-                let mut v = b[(r, c)];
-                for k in 2..=OMEGA_BIAS {
-                    if k != c {
-                        v += b[(r, k)] * a[(c, k)];
-                    }
-                }
-                out[(r, c)] = v;
-            }
-        }
-        // W Q W^T: the velocity noises into the pose block, the walks on
-        // the calibration diagonal.
-        let q = self.noise_cov(u);
-        for r in 0..3 {
-            for c in 0..3 {
-                out[(r, c)] +=
-                    w[(r, 0)] * q[(0, 0)] * w[(c, 0)] + w[(r, 1)] * q[(1, 1)] * w[(c, 1)];
-            }
-        }
-        for i in 0..4 {
-            out[(V_SCALE + i, V_SCALE + i)] += q[(2 + i, 2 + i)];
-        }
-        // Exactly symmetric: the upper triangle from the lower.
-        for r in 0..7 {
-            for c in (r + 1)..7 {
-                out[(r, c)] = out[(c, r)];
-            }
-        }
-        (fx, out)
+        let step = self.propagate_linearized(x, u, p);
+        (step.x, step.p)
     }
 
     fn state_residual(&self, a: &SVector<T, 7>, b: &SVector<T, 7>) -> SVector<T, 7> {
@@ -262,6 +298,10 @@ mod tests {
             p[(0, 2)] = 0.003;
             p[(2, 0)] = 0.003;
             check_propagate(&m, &x, &u, &p, 1e-12).unwrap();
+            let step = m.propagate_linearized(&x, &u, &p);
+            assert_eq!((step.x, step.p), m.propagate(&x, &u, &p));
+            assert_eq!(step.a, m.jacobian_state(&x, &u));
+            assert!((step.ap - step.a * p).abs().max() < 1e-15);
         }
     }
 

@@ -360,23 +360,27 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             nll: 0.0,
         };
         let (cfg, log) = (&self.cfg, self.log);
-        let (_, evicted) = self
+        // Matched in place: the result holds a whole history entry.
+        match &self
             .filter
             .insert(entry, |rules, track, e| apply(cfg, log, rules, track, e))
-            .map_err(|source| Error::Filter {
-                time: event.time(),
-                source,
-            })?;
-        if let Some(e) = evicted {
-            self.emit(&e.0, &e.1);
+        {
+            Ok((_, Some((entry, after)))) => self.emit(entry, after),
+            Ok((_, None)) => {}
+            Err(source) => {
+                return Err(Error::Filter {
+                    time: event.time(),
+                    source: *source,
+                });
+            }
         }
         Ok(())
     }
 
     /// Makes final the events older than `limit` (s).
     fn finalise_before(&mut self, limit: f64) {
-        while let Some((entry, after)) = self.filter.pop_final_before(limit) {
-            self.emit(&entry, &after);
+        while let Some((entry, after)) = &self.filter.pop_final_before(limit) {
+            self.emit(entry, after);
         }
     }
 

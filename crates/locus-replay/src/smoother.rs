@@ -16,8 +16,8 @@
 //! result wrapped.
 
 use locus_core::nalgebra::Cholesky;
-use locus_core::{Belief, Ekf, MotionModel, wrap_angle};
-use locus_models::calibrated_unicycle::{BEARING_BIAS, CalibratedUnicycle};
+use locus_core::{Belief, MotionModel, wrap_angle};
+use locus_models::calibrated_unicycle::{BEARING_BIAS, CalibratedUnicycle, Propagation};
 use locus_models::unicycle::Velocities;
 
 use crate::{STATE, StateMatrix, StateVector};
@@ -38,24 +38,37 @@ pub(crate) struct Node {
     pub omega: f64,
 }
 
-/// The prior at `next` predicted from `here`, and the prediction's
-/// Jacobian (`None` if the prediction fails).
+/// The prior at `next` predicted from `here`, with the prediction's
+/// Jacobian `F` and `F P` (`None` if the prediction fails): the forward
+/// pass's [`locus_core::Ekf::predict`] (the same checks, and the model's
+/// `propagate`, of which this is the by-product-keeping form), so the prior
+/// is the forward pass's to the bit.
 fn prediction(
     model: &CalibratedUnicycle<f64>,
     here: &Node,
     next: &Node,
-) -> Option<(Belief<f64, STATE>, StateMatrix)> {
+) -> Option<Propagation<f64>> {
     let dt = next.time - here.time;
+    let b = &here.posterior;
     if dt > 0.0 {
         let u = Velocities {
             v: here.v,
             omega: here.omega,
             dt,
         };
-        let prior = Ekf::default().predict(&here.posterior, model, &u).ok()?;
-        Some((prior, model.jacobian_state(&here.posterior.x, &u)))
+        let finite = |m: &[f64]| m.iter().all(|v| v.is_finite());
+        if !(model.input_is_finite(&u) && finite(b.x.as_slice()) && finite(b.p.as_slice())) {
+            return None;
+        }
+        let step = model.propagate_linearized(&b.x, &u, &b.p);
+        (finite(step.x.as_slice()) && finite(step.p.as_slice())).then_some(step)
     } else {
-        Some((here.posterior, StateMatrix::identity()))
+        Some(Propagation {
+            x: b.x,
+            p: b.p,
+            a: StateMatrix::identity(),
+            ap: b.p,
+        })
     }
 }
 
@@ -89,15 +102,26 @@ pub(crate) fn rts(
             keep(k, &ahead);
             continue;
         }
-        let (prior, jacobian) = prediction(model, &nodes[k], &nodes[k + 1]).ok_or(k + 1)?;
+        let prior = prediction(model, &nodes[k], &nodes[k + 1]).ok_or(k + 1)?;
         let here = &nodes[k].posterior;
-        // C = P F^T (P-)^-1, as the solution of P- C^T = F P.
-        let chol = Cholesky::new(prior.p).ok_or(k + 1)?;
-        let c = chol.solve(&(jacobian * here.p)).transpose();
+        // C^T = (P-)^-1 F P, as the solution of P- C^T = F P.
+        let ct = Cholesky::new(prior.p).ok_or(k + 1)?.solve(&prior.ap);
         let dx = wrap_angles(ahead.x - prior.x);
-        let x = wrap_angles(here.x + c * dx);
-        let p = here.p + c * (ahead.p - prior.p) * c.transpose();
-        ahead = Belief::new(x, (p + p.transpose()) * 0.5);
+        let x = wrap_angles(here.x + ct.tr_mul(&dx));
+        // Ps = P + C (Ps+ - P-) C^T: one triangle, the other mirrored.
+        let m = ct.tr_mul(&(ahead.p - prior.p));
+        let mut p = here.p;
+        for c in 0..STATE {
+            for r in c..STATE {
+                let mut v = 0.0;
+                for i in 0..STATE {
+                    v += m[(r, i)] * ct[(i, c)];
+                }
+                p[(r, c)] += v;
+                p[(c, r)] = p[(r, c)];
+            }
+        }
+        ahead = Belief::new(x, p);
         keep(k, &ahead);
     }
     Ok(())
@@ -106,6 +130,7 @@ pub(crate) fn rts(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use locus_core::Ekf;
 
     /// The robot standing still, heading 0: its x is a random walk of
     /// variance `psd_v` per second, independent of the other states. Seen
