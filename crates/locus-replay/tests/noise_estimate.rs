@@ -127,25 +127,3 @@ fn recovers_the_noise_and_delay_a_log_was_simulated_with() {
     );
     assert!((c.q_omega / c.q_v - Q_OMEGA / Q_V).abs() < 1e-9);
 }
-
-/// The drift between pose fixes of the sightings finds the process noise
-/// the log was simulated with (white velocity noise).
-#[test]
-fn the_drift_between_fixes_recovers_the_simulated_process_noise() {
-    let log = simulated();
-    let cfg = Config {
-        odometry_delay: DELAY,
-        ..Config::default()
-    };
-    let d = locus_replay::drift::process_noise(&log, &cfg).expect("drift");
-    println!(
-        "drift: q_v {:.5} m^2/s, q_omega {:.5} rad^2/s from {} fixes (simulated {Q_V}, {Q_OMEGA}); intervals {:?}",
-        d.q_v, d.q_omega, d.fixes, d.intervals
-    );
-    assert!(d.q_v / Q_V > 0.5 && d.q_v / Q_V < 2.0, "q_v {}", d.q_v);
-    assert!(
-        d.q_omega / Q_OMEGA > 0.5 && d.q_omega / Q_OMEGA < 2.0,
-        "q_omega {}",
-        d.q_omega
-    );
-}
