@@ -6,8 +6,7 @@
 //! covariance ellipses; errors with +-3 sigma; variances; the NIS with the
 //! consistency monitor's window mean and interval).
 
-use std::fs::{self, File};
-use std::io::{BufWriter, Write};
+use std::fs;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
@@ -18,6 +17,7 @@ use locus_logs::mrclam::Dataset;
 use locus_models::laser_wall::Segment;
 use locus_replay::{Config, Log, Report, Start, StartedFrom, replay};
 
+mod csv_writer;
 mod json;
 
 use crate::metrics::{self, RunMetrics, Settings};
@@ -25,6 +25,7 @@ use crate::output::{print_out, progress_bar};
 use crate::plot::PictureArgs;
 use crate::run::{Info, files_written};
 use crate::table::with_header;
+use csv_writer::CsvWriter;
 use json::ReplayMetrics;
 
 /// Arguments of `locus replay`.
@@ -273,30 +274,12 @@ fn crosses(log: &Log) -> Vec<Segment<f64>> {
 fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str) -> Result<()> {
     crate::output::prepare_run_dir(out)?;
     let csv_path = out.join("log.csv");
-    let file =
-        File::create(&csv_path).with_context(|| format!("creating {}", csv_path.display()))?;
-    let mut csv = BufWriter::new(file);
-    writeln!(csv, "{}", locus_replay::Step::csv_header())
-        .with_context(|| format!("writing {}", csv_path.display()))?;
-
     // With --smooth, the smoothed trajectory goes to smoothed.csv
     // (prepare_run_dir removed an earlier run's).
     let smoothed_path = out.join("smoothed.csv");
-    let mut smoothed_csv = if cfg.smooth {
-        let file = File::create(&smoothed_path)
-            .with_context(|| format!("creating {}", smoothed_path.display()))?;
-        let mut w = BufWriter::new(file);
-        writeln!(w, "{}", locus_replay::Step::smoothed_csv_header())
-            .with_context(|| format!("writing {}", smoothed_path.display()))?;
-        Some(w)
-    } else {
-        None
-    };
     let total = (log.odometry.len() + log.sightings.len()) as u64;
     let bar = progress_bar(total, "{pos}/{len} events, {elapsed} elapsed")?;
     let mut samples: Vec<Sample> = Vec::new();
-    let mut io_error: Option<std::io::Error> = None;
-    let mut row = String::with_capacity(512);
     let mut refused: Vec<String> = log
         .refused_times
         .iter()
@@ -310,59 +293,42 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
             )
         })
         .collect();
-    let report = replay(log, cfg, |step| {
-        if let locus_replay::EventKind::Sighting {
-            sighting,
-            outcome: locus_replay::SightingOutcome::Unusable(why),
-            line,
-        } = step.kind
-        {
-            refused.push(format!(
-                "{}: sighting of landmark {} at {} s (range {} m, bearing {} rad) refused: \
-                 the filter cannot use it: {why}",
-                place(&log.name, line),
-                sighting.landmark,
-                number(sighting.time),
-                number(sighting.range),
-                number(sighting.bearing)
-            ));
-        }
-        if step.index % 4096 == 0 {
-            bar.set_position(step.index as u64);
-        }
-        if !common.pictures.no_plots
-            && let Some(s) = step.sample()
-        {
-            samples.push(s);
-        }
-        if io_error.is_none() {
-            row.clear();
-            step.write_csv_row(&mut row);
-            row.push('\n');
-            if let Err(e) = csv.write_all(row.as_bytes()) {
-                io_error = Some(e);
+    let report = std::thread::scope(|scope| -> Result<Report> {
+        let smoothed = cfg.smooth.then_some(smoothed_path.as_path());
+        let mut writer = CsvWriter::start(scope, &csv_path, smoothed)?;
+        let report = replay(log, cfg, |step| {
+            if let locus_replay::EventKind::Sighting {
+                sighting,
+                outcome: locus_replay::SightingOutcome::Unusable(why),
+                line,
+            } = step.kind
+            {
+                refused.push(format!(
+                    "{}: sighting of landmark {} at {} s (range {} m, bearing {} rad) refused: \
+                     the filter cannot use it: {why}",
+                    place(&log.name, line),
+                    sighting.landmark,
+                    number(sighting.time),
+                    number(sighting.range),
+                    number(sighting.bearing)
+                ));
             }
-            if let Some(w) = smoothed_csv.as_mut() {
-                row.clear();
-                step.write_smoothed_csv_row(&mut row);
-                row.push('\n');
-                if let Err(e) = w.write_all(row.as_bytes()) {
-                    io_error = Some(e);
-                }
+            if step.index % 4096 == 0 {
+                bar.set_position(step.index as u64);
             }
-        }
-    })
-    .with_context(|| format!("replaying {}", log.name))?;
+            if !common.pictures.no_plots
+                && let Some(s) = step.sample()
+            {
+                samples.push(s);
+            }
+            writer.push(step);
+        });
+        let written = writer.finish();
+        let report = report.with_context(|| format!("replaying {}", log.name))?;
+        written?;
+        Ok(report)
+    })?;
     bar.finish_and_clear();
-    if let Some(e) = io_error {
-        return Err(e).with_context(|| format!("writing {}", csv_path.display()));
-    }
-    csv.flush()
-        .with_context(|| format!("writing {}", csv_path.display()))?;
-    if let Some(mut w) = smoothed_csv {
-        w.flush()
-            .with_context(|| format!("writing {}", smoothed_path.display()))?;
-    }
 
     #[allow(clippy::cast_precision_loss)]
     let dt = log.duration() / log.odometry.len().max(1) as f64;
