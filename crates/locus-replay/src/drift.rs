@@ -28,11 +28,11 @@
 //! noisy (a few hundred fixes); `Config::default`'s values are its median
 //! over robots 1-3 of MRCLAM dataset 6 (docs/replay.md).
 
-use locus_core::nalgebra::{Vector2, Vector3};
-use locus_core::{MotionModel, wrap_angle};
-use locus_models::unicycle::{Unicycle, Velocities};
+use locus_core::wrap_angle;
 
+use crate::dead_reckoning::DeadReckoning;
 use crate::initial::{Fix, fix_between};
+use crate::noise::robust_spread;
 use crate::{Config, Error, Log, replay};
 
 /// Seconds between the starts of two fixes.
@@ -115,7 +115,7 @@ pub fn process_noise(log: &Log, cfg: &Config) -> Result<Drift, Error> {
             else {
                 continue;
             };
-            let end = dead_reckon(log, &fixing, a.pose, *ta, target);
+            let end = DeadReckoning::new(log, &fixing, a.pose, *ta).advance(target);
             let (s, c) = a.pose[2].sin_cos();
             along.push((b.pose[0] - end[0]) * c + (b.pose[1] - end[1]) * s);
             heading.push(wrap_angle(b.pose[2] - end[2]));
@@ -124,8 +124,8 @@ pub fn process_noise(log: &Log, cfg: &Config) -> Result<Drift, Error> {
             intervals.push(Interval {
                 seconds,
                 pairs: along.len(),
-                along: robust_variance(along),
-                heading: robust_variance(heading),
+                along: robust_spread(along).powi(2),
+                heading: robust_spread(heading).powi(2),
             });
         }
     }
@@ -135,52 +135,6 @@ pub fn process_noise(log: &Log, cfg: &Config) -> Result<Drift, Error> {
         fixes: fixes.len(),
         intervals,
     })
-}
-
-/// Dead reckoning from `pose` at `from` to `to` (s) on the logged odometry,
-/// with `cfg`'s delay and initial scale factors and turn-rate bias.
-fn dead_reckon(log: &Log, cfg: &Config, pose: Vector3<f64>, from: f64, to: f64) -> Vector3<f64> {
-    let [s_v, s_omega, b_omega, _] = cfg.calibration.initial;
-    let model = Unicycle::new(0.0, 0.0);
-    let (mut x, mut t, mut v, mut omega) = (pose, from, 0.0, 0.0);
-    let mut go = |x: &mut Vector3<f64>, until: f64, v: f64, omega: f64| {
-        if until > t {
-            let u = Velocities {
-                v,
-                omega,
-                dt: until - t,
-            };
-            *x = model.f(x, &u, &Vector2::zeros());
-            t = until;
-        }
-    };
-    let start = log
-        .odometry
-        .partition_point(|o| o.time + cfg.odometry_delay <= from);
-    if let Some(o) = start.checked_sub(1).map(|i| &log.odometry[i]) {
-        v = s_v * o.v;
-        omega = s_omega * o.omega + b_omega;
-    }
-    for o in &log.odometry[start..] {
-        let at = o.time + cfg.odometry_delay;
-        if at >= to {
-            break;
-        }
-        go(&mut x, at, v, omega);
-        v = s_v * o.v;
-        omega = s_omega * o.omega + b_omega;
-    }
-    go(&mut x, to, v, omega);
-    x
-}
-
-/// 1.4826 times the median absolute deviation from the median, squared.
-fn robust_variance(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let median = v[v.len() / 2];
-    let mut dev: Vec<f64> = v.iter().map(|x| (x - median).abs()).collect();
-    dev.sort_by(f64::total_cmp);
-    (1.4826 * dev[dev.len() / 2]).powi(2)
 }
 
 /// Least-squares slope of `value` against the interval (NaN with fewer

@@ -30,8 +30,9 @@
 //! [`MIN_INLIERS`] inliers on at least two landmarks.
 
 use locus_core::nalgebra::{Matrix2x3, Matrix3, Vector2, Vector3};
-use locus_core::{MotionModel, wrap_angle};
-use locus_models::unicycle::{Unicycle, Velocities};
+use locus_core::wrap_angle;
+
+use crate::dead_reckoning::DeadReckoning;
 
 use crate::{Config, Log};
 
@@ -129,31 +130,12 @@ fn pairs(log: &Log, cfg: &Config, t0: f64, to: f64) -> Vec<Pair> {
         })
         .collect();
     sightings.sort_by(|a, b| a.time.total_cmp(&b.time));
-    let [s_v, s_omega, b_omega, b_bearing] = cfg.calibration.initial;
-    let model = Unicycle::new(0.0, 0.0);
-    let mut pose = Vector3::zeros();
-    let (mut t, mut v, mut omega) = (t0, 0.0, 0.0);
-    let mut odometry = log.odometry.iter().peekable();
-    let advance = |pose: &mut Vector3<f64>, t: &mut f64, to: f64, v: f64, omega: f64| {
-        if to > *t {
-            let u = Velocities {
-                v,
-                omega,
-                dt: to - *t,
-            };
-            *pose = model.f(pose, &u, &Vector2::zeros());
-            *t = to;
-        }
-    };
+    let b_bearing = cfg.calibration.initial[3];
+    let mut dead = DeadReckoning::new(log, cfg, Vector3::zeros(), t0);
     let mount = log.sensor;
     let mut out = Vec::with_capacity(sightings.len());
     for s in sightings {
-        while let Some(o) = odometry.next_if(|o| o.time + cfg.odometry_delay <= s.time) {
-            advance(&mut pose, &mut t, o.time + cfg.odometry_delay, v, omega);
-            v = s_v * o.v;
-            omega = s_omega * o.omega + b_omega;
-        }
-        advance(&mut pose, &mut t, s.time, v, omega);
+        let pose = dead.advance(s.time);
         let Some(l) = log.landmark(s.landmark) else {
             continue;
         };

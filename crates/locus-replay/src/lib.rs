@@ -56,6 +56,7 @@
 extern crate alloc;
 
 mod config;
+mod dead_reckoning;
 pub mod drift;
 pub mod initial;
 pub mod log;

@@ -99,7 +99,7 @@ struct Kept {
 
 /// Robust spread: 1.4826 times the median absolute deviation from the
 /// median (NaN if empty).
-fn robust_spread(mut values: Vec<f64>) -> f64 {
+pub(crate) fn robust_spread(mut values: Vec<f64>) -> f64 {
     if values.is_empty() {
         return f64::NAN;
     }
