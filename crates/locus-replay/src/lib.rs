@@ -61,6 +61,7 @@ pub mod drift;
 pub mod initial;
 pub mod log;
 pub mod noise;
+pub mod policy;
 mod report;
 mod smoother;
 mod step;

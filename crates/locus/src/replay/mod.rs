@@ -139,19 +139,10 @@ struct Common {
 }
 
 impl Common {
-    /// The replay's settings: each noise from its flag, else from the log's
-    /// `noise` record, else the default.
-    fn config(&self, log: &Log) -> Config {
-        let d = Config::default();
-        let n = &log.noise;
+    /// The replay's settings other than the noise and the odometry delay
+    /// (settled by `locus_replay::policy`).
+    fn config(&self) -> Config {
         Config {
-            q_v: self.q_v.or(n.q_v).unwrap_or(d.q_v),
-            q_omega: self.q_omega.or(n.q_omega).unwrap_or(d.q_omega),
-            sigma_range: self.sigma_range.or(n.sigma_range).unwrap_or(d.sigma_range),
-            sigma_bearing: self
-                .sigma_bearing
-                .or(n.sigma_bearing)
-                .unwrap_or(d.sigma_bearing),
             gate: (!self.no_gate).then_some(self.gate),
             robust_dof: (!self.no_robust).then_some(self.robust_dof),
             smooth: self.smooth,
@@ -205,56 +196,48 @@ pub fn run(args: &Args) -> Result<()> {
     execute(&log, &cfg, common, &out, &estimated)
 }
 
-/// The replay's settings: [`Common::config`], then what is estimated from
-/// the log (printed): the odometry delay unless given or `--no-estimate`,
-/// the noise with `--estimate-noise` (flags still win).
+/// The replay's settings by `locus_replay::policy` (flags, then the log's
+/// `noise` records, then the estimate, then the defaults), and a table of
+/// what was estimated from the log (empty if nothing was).
 fn calibrate(log: &Log, common: &Common) -> Result<(Config, String)> {
-    let mut cfg = common.config(log);
-    if let Some(d) = common.odometry_delay {
-        cfg.odometry_delay = d;
-    }
-    if common.no_estimate {
-        cfg.validate().context("invalid setting")?;
-        return Ok((cfg, String::new()));
-    }
-    cfg.validate().context("invalid setting")?;
+    use locus_replay::policy::{Estimation, Overrides, Source, settle};
+    let overrides = Overrides {
+        noise: locus_replay::log::NoiseRecords {
+            q_v: common.q_v,
+            q_omega: common.q_omega,
+            sigma_range: common.sigma_range,
+            sigma_bearing: common.sigma_bearing,
+        },
+        odometry_delay: common.odometry_delay,
+        estimation: if common.no_estimate {
+            Estimation::Nothing
+        } else if common.estimate_noise {
+            Estimation::Noise
+        } else {
+            Estimation::Delay
+        },
+    };
+    let settled = settle(log, &common.config(), &overrides)
+        .with_context(|| format!("settling the noise of {}", log.name))?;
     let mut t = with_header(["estimated from the log [unit]", "value"]);
-    if common.estimate_noise {
-        let e = locus_replay::noise::estimate(log, &cfg)
-            .with_context(|| format!("estimating the noise of {}", log.name))?;
-        let c = e.config;
-        let keep = |flag: Option<f64>, estimated: f64| flag.unwrap_or(estimated);
-        cfg.q_v = keep(common.q_v, c.q_v);
-        cfg.q_omega = keep(common.q_omega, c.q_omega);
-        cfg.sigma_range = keep(common.sigma_range, c.sigma_range);
-        cfg.sigma_bearing = keep(common.sigma_bearing, c.sigma_bearing);
-        for (k, v) in [
-            ("q_v [m^2/s]", c.q_v),
-            ("q_omega [rad^2/s]", c.q_omega),
-            ("sigma_range [m]", c.sigma_range),
-            ("sigma_bearing [rad]", c.sigma_bearing),
-        ] {
-            t.add_row(vec![k.to_string(), format!("{v:.5}")]);
-        }
-        if common.odometry_delay.is_none() {
-            cfg.odometry_delay = c.odometry_delay;
-            t.add_row(vec![
-                "odometry delay [s]".to_string(),
-                format!("{:.2}", c.odometry_delay),
-            ]);
-        }
-    } else if common.odometry_delay.is_none() {
-        let (d, _) = locus_replay::noise::estimate_delay(log, &cfg)
-            .with_context(|| format!("estimating the odometry delay of {}", log.name))?;
-        cfg.odometry_delay = d;
-        t.add_row(vec!["odometry delay [s]".to_string(), format!("{d:.2}")]);
+    for s in settled
+        .settings
+        .iter()
+        .filter(|s| s.source == Source::Estimated)
+    {
+        let value = if s.name == "odometry_delay" {
+            format!("{:.2}", s.value)
+        } else {
+            format!("{:.5}", s.value)
+        };
+        t.add_row(vec![format!("{} [{}]", s.name, s.unit), value]);
     }
     let text = if t.is_empty() {
         String::new()
     } else {
         format!("{t}\n")
     };
-    Ok((cfg, text))
+    Ok((settled.config, text))
 }
 
 /// The landmarks as crosses of 0.3 m for the map.
