@@ -194,6 +194,37 @@ fn recovery_inflates_after_consecutive_rejections_then_applies() {
     assert_eq!(c.gain.nrows(), 3);
 }
 
+/// A state the prior holds known (a bias at 0 +- 1e-3 with no process
+/// noise) stays known through any number of recoveries: only the free
+/// states' variances grow, and the inflated covariance stays positive
+/// definite with its correlations.
+#[test]
+fn recovery_leaves_held_states_as_they_are() {
+    let recovery = Recovery::new(1, 4.0).unwrap().holding(&[2]).unwrap();
+    let rules = Rules::new(Ekf::default().with_gate(ChiSquareGate::new(0.99).unwrap()))
+        .with_recovery(recovery);
+    let p0 = Matrix3::new(1e-4, 2e-5, 1e-8, 2e-5, 1e-4, 0.0, 1e-8, 0.0, 1e-6);
+    let mut f = RunningFilter::<f64, 3>::start(rules, Belief::new(Vector3::zeros(), p0), ());
+    // A landmark 1 m further than the belief allows: gated again and again.
+    let model = RangeBearing::new(Vector2::new(2.0, 0.0), Vector2::zeros(), 1e-3, 1e-3);
+    let z = Vector2::new(100.0, 0.0);
+    for _ in 0..10 {
+        let u = f.correct(&model, &z).unwrap();
+        assert!(u.inflated() && !u.applied(), "{u:?}");
+    }
+    let p = f.belief().p;
+    assert_eq!(p[(2, 2)], 1e-6, "the held state's variance is kept");
+    let k = 4f64.powi(10);
+    assert!((p[(0, 0)] / (k * 1e-4) - 1.0).abs() < 1e-12, "{p}");
+    assert!((p[(0, 2)] / (k.sqrt() * 1e-8) - 1.0).abs() < 1e-12, "{p}");
+    assert!(p.cholesky().is_some() && p == p.transpose());
+    // Nothing held: exactly k P.
+    let mut q = p0;
+    Recovery::new(1, 4.0).unwrap().inflate(&mut q);
+    assert_eq!(q, p0 * 4.0);
+    assert!(Recovery::new(1, 4.0).unwrap().holding(&[64]).is_err());
+}
+
 #[test]
 fn an_error_keeps_the_belief_and_the_history() {
     let events = timeline(3, 40);

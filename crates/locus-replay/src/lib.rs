@@ -39,7 +39,9 @@
 //!   later sighting; so after [`Config::recover_after`] consecutive
 //!   rejections the covariance is multiplied by [`Config::inflation`] and
 //!   the sighting is tried again (and again at each further rejection, so
-//!   the inflation compounds until a sighting fits).
+//!   the inflation compounds until a sighting fits). The calibration
+//!   states with no random walk are held: the inflation leaves them as
+//!   they are ([`locus_core::Recovery`]).
 //! * **Initial pose.** The log's start pose, else the ground truth at the
 //!   first odometry time, else the pose the first sightings fix
 //!   ([`initial`]); [`Config::start`] can ask for the last whatever the
@@ -596,7 +598,14 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
         ekf = ekf
             .with_gate(ChiSquareGate::new(g).map_err(|_| Error::InvalidConfig("gate confidence"))?);
     }
+    // The inflation leaves alone the calibration states the model holds
+    // constant (no random walk): only the pose and what drifts may grow.
+    let held: Vec<usize> = (0..4)
+        .filter(|&i| cfg.calibration.walk[i] == 0.0)
+        .map(|i| V_SCALE + i)
+        .collect();
     let recovery = Recovery::new(cfg.recover_after, cfg.inflation)
+        .and_then(|r| r.holding(&held))
         .map_err(|_| Error::InvalidConfig("recovery"))?;
     let rules = Rules::new(ekf).with_recovery(recovery);
     if let Some(dof) = cfg.robust_dof {

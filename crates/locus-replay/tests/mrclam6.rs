@@ -642,3 +642,26 @@ fn the_default_process_noise_is_the_drift_of_robots_one_to_three() {
         d.q_omega
     );
 }
+
+/// Recovery inflations leave the calibration states the prior holds known
+/// as they are: robot 4 with a range noise far too small (0.05 m) is
+/// inflated 15 times, and its turn-rate and bearing biases, held at
+/// 0 +- 1e-6 with no random walk, end exactly at their prior. (Inflating
+/// the whole covariance freed them: bearing bias 0.044 +- 0.018 rad,
+/// turn-rate bias -0.0053 rad/s.)
+#[test]
+fn recovery_keeps_the_held_biases_at_their_prior() {
+    let log = &logs()[3];
+    let cfg = Config {
+        sigma_range: 0.05,
+        ..Config::default()
+    };
+    let r = run(log, &cfg);
+    assert!(r.inflations >= 5, "the case needs inflations: {}", r.inflations);
+    let std = Config::default().calibration.std;
+    for (i, name) in [(2, "turn-rate bias"), (3, "bearing bias")] {
+        let (mean, sd) = r.calibration[i];
+        assert!(mean.abs() < 1e-9, "{name}: {mean}");
+        assert!(sd <= std[i], "{name}: std {sd} > prior {}", std[i]);
+    }
+}
