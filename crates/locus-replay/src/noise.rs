@@ -48,10 +48,11 @@ use locus_core::{MeasurementModel, wrap_angle};
 use locus_models::calibrated_range_bearing::CalibratedRangeBearing;
 use locus_models::range_bearing::RangeBearing;
 
+use crate::log::NoiseRecords;
 use crate::{Config, Error, EventKind, Log, STATE, Step, replay};
 
 /// Window of the batch-means estimate of the residuals' correlation, s.
-pub const WINDOW: f64 = 10.0;
+pub const WINDOW: f64 = 30.0;
 /// The odometry delays tried, s.
 pub const DELAYS: [f64; 8] = [0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4];
 /// The factors on the process noise tried.
@@ -71,6 +72,49 @@ pub struct Round {
     pub bearing_spread: f64,
     /// Their integrated autocorrelation time, in sightings (>= 1).
     pub bearing_tau: f64,
+    /// Range residuals the round used.
+    pub ranges: usize,
+    /// Bearing residuals the round used.
+    pub bearings: usize,
+    /// The smoother's calibration over the whole log, `(mean, standard
+    /// deviation)` in the order of `Report::calibration`.
+    pub calibration: [(f64, f64); 4],
+}
+
+impl Round {
+    /// Standard error of the range noise the round sets, m: the spread's
+    /// (1.4826 MAD has 37 % of the efficiency of the standard deviation)
+    /// over the effective number of independent residuals `n / tau`.
+    #[must_use]
+    #[allow(clippy::cast_precision_loss)]
+    pub fn range_se(&self) -> f64 {
+        spread_se(
+            self.range_spread * self.range_tau.sqrt(),
+            self.ranges,
+            self.range_tau,
+        )
+    }
+
+    /// Standard error of the bearing noise the round sets, rad.
+    #[must_use]
+    pub fn bearing_se(&self) -> f64 {
+        spread_se(
+            self.bearing_spread * self.bearing_tau.sqrt(),
+            self.bearings,
+            self.bearing_tau,
+        )
+    }
+}
+
+/// Standard error of a robust spread `sigma` from `n` residuals of
+/// autocorrelation time `tau` (NaN with none).
+#[allow(clippy::cast_precision_loss)]
+fn spread_se(sigma: f64, n: usize, tau: f64) -> f64 {
+    let effective = n as f64 / tau.max(1.0);
+    if effective < 1.0 {
+        return f64::NAN;
+    }
+    sigma / (2.0 * 0.37 * effective).sqrt()
 }
 
 /// The estimate: the settings to replay with, and how they were reached.
@@ -83,8 +127,28 @@ pub struct Estimate {
     pub rounds: Vec<Round>,
     /// `(delay s, innovation NLL)` for each delay tried.
     pub delays: Vec<(f64, f64)>,
-    /// `(factor, innovation NLL)` for each process-noise factor tried.
+    /// `(factor, innovation NLL)` for each process-noise factor tried
+    /// (empty when the drift gave the process noise).
     pub q_factors: Vec<(f64, f64)>,
+    /// The drift estimate of the process noise.
+    pub drift: crate::drift::Drift,
+}
+
+impl Estimate {
+    /// Standard error of the drift's `q_v` (`k` = 0, m^2/s) or `q_omega`
+    /// (`k` = 1, rad^2/s); NaN when the likelihood grid set the process
+    /// noise instead.
+    #[must_use]
+    pub fn drift_se(&self, k: usize) -> f64 {
+        if !self.q_factors.is_empty() {
+            return f64::NAN;
+        }
+        if k == 0 {
+            self.drift.q_v_se
+        } else {
+            self.drift.q_omega_se
+        }
+    }
 }
 
 /// What a round keeps of each smoothed sighting.
@@ -154,7 +218,7 @@ pub fn measurement_round(log: &Log, cfg: &Config) -> Result<(Round, Config), Err
         evaluate: false,
         ..*cfg
     };
-    replay(log, &run, |s: &Step| {
+    let report = replay(log, &run, |s: &Step| {
         if let (EventKind::Sighting { sighting, .. }, Some(p), Some(c)) =
             (s.kind, s.smoothed, s.smoothed_calibration)
         {
@@ -225,6 +289,9 @@ pub fn measurement_round(log: &Log, cfg: &Config) -> Result<(Round, Config), Err
             range_tau,
             bearing_spread,
             bearing_tau,
+            ranges: ranges.len(),
+            bearings: bearings.len(),
+            calibration: report.smoothed_calibration.unwrap_or(report.calibration),
         },
         next,
     ))
@@ -260,43 +327,94 @@ fn grid_minimum(
     Ok((best, tried))
 }
 
+/// Most measurement rounds in one run to convergence.
+pub const MAX_ROUNDS: usize = 8;
+/// Relative change of both measurement noises below which the rounds stop.
+pub const CONVERGED: f64 = 0.03;
+
+/// `cfg` with the noise levels `given` put back (they are not estimated).
+fn pin(mut cfg: Config, given: &NoiseRecords) -> Config {
+    cfg.q_v = given.q_v.unwrap_or(cfg.q_v);
+    cfg.q_omega = given.q_omega.unwrap_or(cfg.q_omega);
+    cfg.sigma_range = given.sigma_range.unwrap_or(cfg.sigma_range);
+    cfg.sigma_bearing = given.sigma_bearing.unwrap_or(cfg.sigma_bearing);
+    cfg
+}
+
+/// Measurement rounds from `cfg` until both noises change by less than
+/// [`CONVERGED`] (at most [`MAX_ROUNDS`]): expectation-maximisation
+/// converges geometrically, slowly from a start far off.
+fn converge(
+    log: &Log,
+    mut cfg: Config,
+    given: &NoiseRecords,
+    rounds: &mut Vec<Round>,
+) -> Result<Config, Error> {
+    for _ in 0..MAX_ROUNDS {
+        let (r, next) = measurement_round(log, &cfg)?;
+        let next = pin(next, given);
+        rounds.push(r);
+        let change = (next.sigma_range / cfg.sigma_range - 1.0)
+            .abs()
+            .max((next.sigma_bearing / cfg.sigma_bearing - 1.0).abs());
+        cfg = next;
+        if change < CONVERGED {
+            break;
+        }
+    }
+    Ok(cfg)
+}
+
 /// Estimates the noise and the odometry delay of `log`, starting from
-/// `start` (see the module documentation).
+/// `start`, keeping the noise levels `given` and, if `delay_given`,
+/// `start`'s odometry delay:
+///
+/// 1. measurement rounds to convergence ([`measurement_round`]);
+/// 2. the odometry delay of smallest innovation NLL ([`DELAYS`]);
+/// 3. the process noise from the drift of dead reckoning between pose
+///    fixes ([`crate::drift::process_noise`]); where the log has too few
+///    fixes for it, the factor of [`Q_FACTORS`] of smallest innovation NLL;
+/// 4. measurement rounds to convergence again.
 ///
 /// # Errors
 /// The replay's errors.
-pub fn estimate(log: &Log, start: &Config) -> Result<Estimate, Error> {
+pub fn estimate(
+    log: &Log,
+    start: &Config,
+    given: &NoiseRecords,
+    delay_given: bool,
+) -> Result<Estimate, Error> {
     let mut rounds = Vec::new();
-    let (r, mut cfg) = measurement_round(log, start)?;
-    rounds.push(r);
-    let (delay, delays) = grid_minimum(&DELAYS, |d| {
-        nll(
-            log,
-            &Config {
-                odometry_delay: d,
-                ..cfg
-            },
-        )
-    })?;
-    cfg.odometry_delay = delay;
-    let (r, next) = measurement_round(log, &cfg)?;
-    rounds.push(r);
-    cfg = next;
-    let (factor, q_factors) = grid_minimum(&Q_FACTORS, |k| {
-        nll(
-            log,
-            &Config {
-                q_v: cfg.q_v * k,
-                q_omega: cfg.q_omega * k,
-                ..cfg
-            },
-        )
-    })?;
-    cfg.q_v *= factor;
-    cfg.q_omega *= factor;
-    let (r, next) = measurement_round(log, &cfg)?;
-    rounds.push(r);
-    cfg = next;
+    let mut cfg = converge(log, pin(*start, given), given, &mut rounds)?;
+    let mut delays = Vec::new();
+    if !delay_given {
+        let (delay, tried) = estimate_delay(log, &cfg)?;
+        cfg.odometry_delay = delay;
+        delays = tried;
+    }
+    let mut q_factors = Vec::new();
+    let drift = crate::drift::process_noise(log, &cfg)?;
+    let told = |q: f64| q.is_finite() && q > 0.0;
+    if told(drift.q_v) && told(drift.q_omega) {
+        cfg.q_v = drift.q_v;
+        cfg.q_omega = drift.q_omega;
+    } else {
+        let (factor, tried) = grid_minimum(&Q_FACTORS, |k| {
+            nll(
+                log,
+                &Config {
+                    q_v: cfg.q_v * k,
+                    q_omega: cfg.q_omega * k,
+                    ..cfg
+                },
+            )
+        })?;
+        cfg.q_v *= factor;
+        cfg.q_omega *= factor;
+        q_factors = tried;
+    }
+    cfg = pin(cfg, given);
+    let cfg = converge(log, cfg, given, &mut rounds)?;
     Ok(Estimate {
         config: Config {
             smooth: start.smooth,
@@ -306,6 +424,7 @@ pub fn estimate(log: &Log, start: &Config) -> Result<Estimate, Error> {
         rounds,
         delays,
         q_factors,
+        drift,
     })
 }
 

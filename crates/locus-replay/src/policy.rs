@@ -5,6 +5,20 @@
 //! For each value, in order: the user's explicit choice ([`Overrides`]),
 //! then the log's own `noise` record, then what the log itself shows
 //! (estimated, [`Estimation`]), then [`Config::default`].
+//!
+//! With [`Estimation::Noise`] (the command's default) the calibration's
+//! two biases are also settled from the log. Each starts free, from 0 with
+//! a prior wide enough for a real robot ([`BIAS_PRIOR_STD`], two standard
+//! deviations covering a sensor
+//! mounted up to 0.1 rad off-axis, a turn rate biased by up to 0.1 rad/s),
+//! while the noise is estimated: a bearing offset the filter cannot
+//! absorb would otherwise be taken for bearing noise. The smoother over
+//! the whole log then says how well the log tells each bias: a bias whose
+//! smoothed standard deviation stays above [`HOLD_RATIO`] of its prior is
+//! one the log cannot tell (e.g. a bearing offset on a robot that hardly
+//! moves); it is held at 0 and reported as held. A bias the log tells is
+//! estimated by the replay from its prior, with the uncertainty the filter
+//! gives it.
 
 use locus_logs::NoiseRecords;
 
@@ -71,6 +85,31 @@ pub struct Setting {
     pub value: f64,
     /// Where it came from.
     pub source: Source,
+    /// Its standard error when estimated (NaN when the estimate gives
+    /// none, or the value was not estimated).
+    pub se: f64,
+}
+
+/// Prior standard deviations of the turn-rate bias (rad/s) and the
+/// bearing bias (rad) when the log settles them.
+pub const BIAS_PRIOR_STD: [f64; 2] = [0.05, 0.05];
+/// A bias whose smoothed standard deviation over the whole log exceeds
+/// this share of its prior is held (the log cannot tell it).
+pub const HOLD_RATIO: f64 = 0.5;
+
+/// How a bias of the calibration was settled.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BiasSetting {
+    /// `turn-rate bias` or `bearing bias`.
+    pub name: &'static str,
+    /// Its unit.
+    pub unit: &'static str,
+    /// Its prior standard deviation while the log was asked.
+    pub prior_std: f64,
+    /// What the smoother over the whole log found: `(mean, std)`.
+    pub smoothed: (f64, f64),
+    /// Held at 0 because the log cannot tell it.
+    pub held: bool,
 }
 
 /// The settled configuration and where each of its noise levels and the
@@ -82,6 +121,9 @@ pub struct Settled {
     /// `q_v`, `q_omega`, `sigma_range`, `sigma_bearing`, `odometry_delay`,
     /// in that order.
     pub settings: Vec<Setting>,
+    /// The biases, with [`Estimation::Noise`] (else empty: held as the
+    /// base configuration says).
+    pub biases: Vec<BiasSetting>,
     /// The noise estimate, when one was made.
     pub estimate: Option<crate::noise::Estimate>,
 }
@@ -137,6 +179,8 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
     };
     cfg.validate()?;
     let mut estimate = None;
+    let mut errors = [f64::NAN; 5];
+    let mut biases = Vec::new();
     match overrides.estimation {
         Estimation::Nothing => {}
         Estimation::Delay => {
@@ -147,17 +191,64 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
             }
         }
         Estimation::Noise => {
-            let e = crate::noise::estimate(log, &cfg)?;
-            for (i, name) in NoiseRecords::NAMES.into_iter().enumerate() {
-                if matches!(sources[i], Source::Given | Source::LogRecord) {
-                    continue;
+            let mut free = cfg;
+            for (k, std) in BIAS_PRIOR_STD.into_iter().enumerate() {
+                free.calibration.initial[2 + k] = 0.0;
+                free.calibration.std[2 + k] = std;
+            }
+            let e = crate::noise::estimate(
+                log,
+                &free,
+                &given_or_recorded(&overrides.noise, &log.noise),
+                overrides.odometry_delay.is_some(),
+            )?;
+            cfg = Config {
+                calibration: cfg.calibration,
+                ..e.config
+            };
+            for (i, source) in sources.iter_mut().take(4).enumerate() {
+                if *source == Source::Default {
+                    *source = Source::Estimated;
+                    errors[i] = match i {
+                        0 => e.drift_se(0),
+                        1 => e.drift_se(1),
+                        2 => e
+                            .rounds
+                            .last()
+                            .map_or(f64::NAN, crate::noise::Round::range_se),
+                        _ => e
+                            .rounds
+                            .last()
+                            .map_or(f64::NAN, crate::noise::Round::bearing_se),
+                    };
                 }
-                *slot(&mut cfg, name) = get(&e.config, name);
-                sources[i] = Source::Estimated;
             }
             if overrides.odometry_delay.is_none() {
-                cfg.odometry_delay = e.config.odometry_delay;
                 sources[4] = Source::Estimated;
+            }
+            let smoothed = e
+                .rounds
+                .last()
+                .map_or([(f64::NAN, f64::NAN); 4], |r| r.calibration);
+            for (k, (name, unit)) in [("turn-rate bias", "rad/s"), ("bearing bias", "rad")]
+                .into_iter()
+                .enumerate()
+            {
+                let prior_std = BIAS_PRIOR_STD[k];
+                let found = smoothed[2 + k];
+                // NaN (no smoother run) holds too.
+                let held = found.1.is_nan() || found.1 > HOLD_RATIO * prior_std;
+                if !held {
+                    cfg.calibration.initial[2 + k] = 0.0;
+                    cfg.calibration.std[2 + k] = prior_std;
+                }
+                biases.push(BiasSetting {
+                    name,
+                    unit,
+                    prior_std,
+                    smoothed: found,
+                    held,
+                });
             }
             estimate = Some(e);
         }
@@ -171,6 +262,7 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
             unit,
             value: get(&cfg, name),
             source: sources[i],
+            se: errors[i],
         })
         .collect();
     settings.push(Setting {
@@ -178,10 +270,23 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
         unit: "s",
         value: cfg.odometry_delay,
         source: sources[4],
+        se: f64::NAN,
     });
     Ok(Settled {
         config: cfg,
         settings,
+        biases,
         estimate,
     })
+}
+
+/// The noise levels fixed before any estimate: each given one, else each
+/// the log records.
+fn given_or_recorded(given: &NoiseRecords, recorded: &NoiseRecords) -> NoiseRecords {
+    NoiseRecords {
+        q_v: given.q_v.or(recorded.q_v),
+        q_omega: given.q_omega.or(recorded.q_omega),
+        sigma_range: given.sigma_range.or(recorded.sigma_range),
+        sigma_bearing: given.sigma_bearing.or(recorded.sigma_bearing),
+    }
 }

@@ -657,7 +657,11 @@ fn recovery_keeps_the_held_biases_at_their_prior() {
         ..Config::default()
     };
     let r = run(log, &cfg);
-    assert!(r.inflations >= 5, "the case needs inflations: {}", r.inflations);
+    assert!(
+        r.inflations >= 5,
+        "the case needs inflations: {}",
+        r.inflations
+    );
     let std = Config::default().calibration.std;
     for (i, name) in [(2, "turn-rate bias"), (3, "bearing bias")] {
         let (mean, sd) = r.calibration[i];

@@ -327,9 +327,11 @@ fn drift_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
 /// the median of each estimated value; and how it was reached.
 fn estimate_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
     let each = each_log(logs, |log| {
-        Ok(locus_replay::noise::estimate(log, start)
-            .with_context(|| format!("estimating the noise of {}", log.name))?
-            .config)
+        Ok(
+            locus_replay::noise::estimate(log, start, &Default::default(), false)
+                .with_context(|| format!("estimating the noise of {}", log.name))?
+                .config,
+        )
     })?;
     let pick = |f: fn(&Config) -> f64| median(each.iter().map(f).collect());
     let tuned = Config {

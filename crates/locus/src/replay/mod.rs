@@ -109,17 +109,19 @@ struct Common {
     #[arg(long)]
     no_robust: bool,
     /// How long after an odometry record the robot moves as it says, s.
-    /// Default: estimated from the log (the delay of smallest innovation
-    /// likelihood on a grid from 0 to 0.4 s).
+    /// Default: estimated from the log (the delay of smallest innovation likelihood
+    /// on a grid from 0 to 0.4 s).
     #[arg(long, value_parser = crate::args::finite_f64)]
     odometry_delay: Option<f64>,
-    /// Also estimate the noise from the log (EM over the smoother and
-    /// innovation likelihood, no ground truth; see docs/replay.md: more
-    /// accurate on MRCLAM, but over-confident). Noise flags still win.
+    /// Also estimate the noise from the log (no ground truth; flags and the
+    /// log's noise records still win) and settle the turn-rate and bearing
+    /// biases: each estimated from 0 +- 0.05 where the whole log tells it,
+    /// else held at 0 and reported as held (docs/replay.md).
     #[arg(long)]
     estimate_noise: bool,
     /// Estimate nothing: the flags, the log's noise records and the
-    /// defaults as they are (odometry delay 0 unless given).
+    /// built-in values as they are (odometry delay 0 unless given, biases
+    /// held at 0).
     #[arg(long, conflicts_with = "estimate_noise")]
     no_estimate: bool,
     /// Also run the Rauch-Tung-Striebel smoother over the whole log: its
@@ -219,24 +221,42 @@ fn calibrate(log: &Log, common: &Common) -> Result<(Config, String)> {
     };
     let settled = settle(log, &common.config(), &overrides)
         .with_context(|| format!("settling the noise of {}", log.name))?;
-    let mut t = with_header(["estimated from the log [unit]", "value"]);
-    for s in settled
-        .settings
-        .iter()
-        .filter(|s| s.source == Source::Estimated)
-    {
-        let value = if s.name == "odometry_delay" {
-            format!("{:.2}", s.value)
-        } else {
-            format!("{:.5}", s.value)
-        };
-        t.add_row(vec![format!("{} [{}]", s.name, s.unit), value]);
+    let mut t = with_header(["setting [unit]", "value", "+- (1 sigma)", "from"]);
+    for s in &settled.settings {
+        let decimals = if s.name == "odometry_delay" { 2 } else { 5 };
+        t.add_row(vec![
+            format!("{} [{}]", s.name, s.unit),
+            format!("{:.decimals$}", s.value),
+            if s.source == Source::Estimated {
+                figure(s.se, decimals)
+            } else {
+                "-".to_string()
+            },
+            s.source.to_string(),
+        ]);
     }
-    let text = if t.is_empty() {
-        String::new()
-    } else {
-        format!("{t}\n")
-    };
+    for b in &settled.biases {
+        let (m, sd) = b.smoothed;
+        t.add_row(vec![
+            format!("{} [{}]", b.name, b.unit),
+            if b.held {
+                "held at 0".to_string()
+            } else {
+                format!("estimated from 0 +- {}", b.prior_std)
+            },
+            "-".to_string(),
+            if b.held {
+                format!(
+                    "the log cannot tell it: the whole log gives {m:.4} +- {sd:.4}, over {} of the prior's {}",
+                    locus_replay::policy::HOLD_RATIO,
+                    b.prior_std
+                )
+            } else {
+                format!("the whole log tells it: {m:.4} +- {sd:.4}")
+            },
+        ]);
+    }
+    let text = format!("{t}\n");
     Ok((settled.config, text))
 }
 
