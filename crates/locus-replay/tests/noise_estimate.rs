@@ -188,7 +188,6 @@ fn a_bearing_offset_a_robot_standing_still_cannot_tell_is_held() {
     ])
     .expect("truth");
     log.start = Some(pose);
-    let template = log.sightings[0];
     log.sightings = (0..240)
         .flat_map(|k| {
             let t = f64::from(k) * 0.5 + 0.05;
@@ -208,7 +207,6 @@ fn a_bearing_offset_a_robot_standing_still_cannot_tell_is_held() {
             bearing: locus_core::wrap_angle(
                 dy.atan2(dx) - pose.theta + 0.04 + SIGMA_BEARING * normal(&mut rng),
             ),
-            ..template
         })
         .collect();
     log.sighting_lines.clear();
