@@ -147,27 +147,68 @@ pub fn process_noise(log: &Log, cfg: &Config) -> Result<Drift, Error> {
     })
 }
 
-/// Least-squares slope of `value` against the interval and its standard
-/// error (NaN with fewer than two intervals). The error propagates each
-/// interval's robust variance error: 1.4826 MAD has 37 % of the efficiency
-/// of the standard deviation, and pairs of an interval of `T` seconds
-/// overlap, so an interval counts `pairs * STEP / T` independent pairs.
+/// Slope of `value` against the interval by weighted least squares, and
+/// its standard error (NaN with fewer than two intervals).
+///
+/// An interval's robust variance `v` has a variance of about `2 v^2 /
+/// (0.37 n)`: 1.4826 MAD has 37 % of the efficiency of the standard
+/// deviation, and pairs of an interval of `T` seconds overlap, so it counts
+/// `n = pairs * STEP / T` independent pairs. The long intervals have few
+/// pairs and large variances; weighting each by the inverse of that
+/// variance (with `v` from the fitted line, iterated from an unweighted
+/// fit, so a small sample variance does not weigh itself up) lets the
+/// short intervals, where a filter's gaps between sightings lie, set the
+/// slope.
 #[allow(clippy::cast_precision_loss)]
 fn slope(intervals: &[Interval], value: impl Fn(&Interval) -> f64) -> (f64, f64) {
     if intervals.len() < 2 {
         return (f64::NAN, f64::NAN);
     }
-    let n = intervals.len() as f64;
-    let mx = intervals.iter().map(|i| i.seconds).sum::<f64>() / n;
-    let my = intervals.iter().map(&value).sum::<f64>() / n;
-    let den: f64 = intervals.iter().map(|i| (i.seconds - mx).powi(2)).sum();
-    let (mut num, mut var) = (0.0, 0.0);
-    for i in intervals {
-        let w = (i.seconds - mx) / den;
-        let v = value(i);
-        num += (i.seconds - mx) * (v - my);
-        let independent = (i.pairs as f64 * STEP / i.seconds).max(1.0);
-        var += w * w * v * v * 2.0 / (0.37 * independent);
+    let independent = |i: &Interval| (i.pairs as f64 * STEP / i.seconds).max(1.0);
+    let mut weights: Vec<f64> = intervals.iter().map(|_| 1.0).collect();
+    let mut fit = (f64::NAN, f64::NAN, f64::NAN);
+    for _ in 0..3 {
+        let total: f64 = weights.iter().sum();
+        let mx = intervals
+            .iter()
+            .zip(&weights)
+            .map(|(i, w)| w * i.seconds)
+            .sum::<f64>()
+            / total;
+        let my = intervals
+            .iter()
+            .zip(&weights)
+            .map(|(i, w)| w * value(i))
+            .sum::<f64>()
+            / total;
+        let den: f64 = intervals
+            .iter()
+            .zip(&weights)
+            .map(|(i, w)| w * (i.seconds - mx).powi(2))
+            .sum();
+        let num: f64 = intervals
+            .iter()
+            .zip(&weights)
+            .map(|(i, w)| w * (i.seconds - mx) * (value(i) - my))
+            .sum();
+        let b = num / den;
+        let a = my - b * mx;
+        // The slope's variance, each interval's variance from the line.
+        let var: f64 = intervals
+            .iter()
+            .zip(&weights)
+            .map(|(i, w)| {
+                let c = w * (i.seconds - mx) / den;
+                let v = (a + b * i.seconds).max(value(i).abs() * 0.1);
+                c * c * 2.0 * v * v / (0.37 * independent(i))
+            })
+            .sum();
+        fit = (b, var.sqrt(), a);
+        let floor = intervals.iter().map(&value).fold(0.0, f64::max) * 0.01;
+        for (w, i) in weights.iter_mut().zip(intervals) {
+            let v = (a + b * i.seconds).max(floor).max(f64::MIN_POSITIVE);
+            *w = independent(i) / (v * v);
+        }
     }
-    (num / den, var.sqrt())
+    (fit.0, fit.1)
 }

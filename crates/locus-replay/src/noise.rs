@@ -52,7 +52,7 @@ use crate::log::NoiseRecords;
 use crate::{Config, Error, EventKind, Log, STATE, Step, replay};
 
 /// Window of the batch-means estimate of the residuals' correlation, s.
-pub const WINDOW: f64 = 30.0;
+pub const WINDOW: f64 = 60.0;
 /// The odometry delays tried, s.
 pub const DELAYS: [f64; 8] = [0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4];
 /// The factors on the process noise tried.
