@@ -87,7 +87,10 @@ impl Sample {
     /// `belief` of `[x, y, theta]` against `truth`, odometry alone at
     /// `odometry` if there is one, the step's correction `(NIS, dof,
     /// applied)` and whether a measurement arrived. NEES of 3 dof
-    /// ([`planar_nees`]); z is 0.
+    /// ([`planar_nees`]); z is 0. A truth with no heading (`truth.theta`
+    /// NaN, e.g. a tracker of positions only) is compared in position
+    /// only: the heading errors are NaN and the NEES is over the 2
+    /// position dof (`nees_dof` 2).
     #[must_use]
     pub fn planar(
         step: usize,
@@ -100,6 +103,12 @@ impl Sample {
     ) -> Self {
         let x = &belief.x;
         let error = Pose::from_vector(x).error_to(truth);
+        let (nees, nees_dof) = if truth.theta.is_nan() {
+            let e = error.fixed_rows::<2>(0).into_owned();
+            (nees(&e, &belief.p.fixed_view::<2, 2>(0, 0).into_owned()), 2)
+        } else {
+            (nees(&error, &belief.p), 3)
+        };
         Self {
             step,
             time,
@@ -111,8 +120,8 @@ impl Sample {
             covariance: matrix3(&belief.p),
             var_z: 0.0,
             odometry: odometry.map(|o| ([o.x, o.y, 0.0], o.error_to(truth)[2])),
-            nees: nees(&error, &belief.p),
-            nees_dof: 3,
+            nees,
+            nees_dof,
             correction,
             measured,
         }
@@ -150,26 +159,39 @@ pub struct Summary {
     pub laps_completed: usize,
     /// EKF position RMSE (m).
     pub ekf_position_rmse: f64,
-    /// EKF heading RMSE (rad, wrapped errors; for `hover` the attitude angle).
+    /// EKF heading RMSE (rad, wrapped errors; for `hover` the attitude
+    /// angle); NaN if the truth has no heading.
     pub ekf_heading_rmse: f64,
+    /// Circular mean of the EKF's wrapped heading errors (truth minus
+    /// estimate), rad in (-pi, pi]: a constant offset between the truth's
+    /// heading frame and the robot's (motion capture rarely aligns them);
+    /// NaN if the truth has no heading.
+    pub ekf_heading_offset: f64,
+    /// EKF heading RMSE about [`Summary::ekf_heading_offset`]: the RMS of
+    /// the heading errors minus the offset, wrapped, rad; NaN if the truth
+    /// has no heading.
+    pub ekf_heading_rmse_about_offset: f64,
     /// EKF largest position error (m).
     pub ekf_max_position_error: f64,
     /// Odometry-only position RMSE (m); NaN if the scenario has none.
     pub odometry_position_rmse: f64,
-    /// Odometry-only heading RMSE (rad); NaN if the scenario has none.
+    /// Odometry-only heading RMSE (rad); NaN if the scenario has none or
+    /// the truth has no heading.
     pub odometry_heading_rmse: f64,
     /// Odometry-only largest position error (m); NaN if none.
     pub odometry_max_position_error: f64,
     /// Mean NEES of the EKF (the state dimension for a consistent filter).
     pub mean_nees: f64,
-    /// Degrees of freedom of the NEES (the state dimension).
+    /// Degrees of freedom of the NEES (the state dimension; 2, the
+    /// position, for a truth with no heading).
     pub nees_dof: u32,
     /// Share of steps whose NEES lies in the two-sided 95 % chi-square
     /// interval of `nees_dof` (0.95 for a consistent filter).
     pub nees_in_interval: f64,
     /// Share of steps whose error lies within 3 standard deviations of the
     /// filter's own covariance, per component: x, y, heading (0.997 each
-    /// for a consistent Gaussian filter).
+    /// for a consistent Gaussian filter); heading NaN if the truth has no
+    /// heading.
     pub within_3_sigma: [f64; 3],
     /// Steps where a measurement arrived.
     pub readings: usize,
@@ -207,16 +229,23 @@ pub struct Tally {
     sim_time: f64,
     sq_pos: f64,
     sq_heading: f64,
+    /// The EKF's wrapped heading errors (rad) of the steps whose truth has
+    /// a heading.
+    heading_errors: Vec<f64>,
     max_pos: f64,
     odo_n: usize,
     odo_sq_pos: f64,
     odo_sq_heading: f64,
+    odo_heading_n: usize,
     odo_max_pos: f64,
     nees_sum: f64,
     nees_in: usize,
     within_3_sigma: [usize; 3],
     nees_dof: u32,
     nees_bounds: (f64, f64),
+    /// Whether samples of different NEES dof were pushed (their mean is
+    /// then no figure: NaN).
+    mixed_dof: bool,
     readings: usize,
     associated: usize,
     corrections: usize,
@@ -235,10 +264,12 @@ impl Tally {
             sim_time: 0.0,
             sq_pos: 0.0,
             sq_heading: 0.0,
+            heading_errors: Vec::new(),
             max_pos: 0.0,
             odo_n: 0,
             odo_sq_pos: 0.0,
             odo_sq_heading: 0.0,
+            odo_heading_n: 0,
             odo_max_pos: 0.0,
             nees_sum: 0.0,
             nees_in: 0,
@@ -248,25 +279,48 @@ impl Tally {
                 chi2::quantile(0.025, nees_dof)?,
                 chi2::quantile(0.975, nees_dof)?,
             ),
+            mixed_dof: false,
             readings: 0,
             associated: 0,
             corrections: 0,
         })
     }
 
-    /// Adds one step.
+    /// Adds one step. Its heading figures count only if its heading error
+    /// is a number (a truth with no heading gives NaN); the NEES takes the
+    /// sample's dof: the first sample's replaces the tally's, and samples
+    /// of different dof make the NEES figures NaN.
     pub fn push(&mut self, s: &Sample) {
+        if s.nees_dof != self.nees_dof {
+            match (
+                self.steps,
+                chi2::quantile(0.025, s.nees_dof),
+                chi2::quantile(0.975, s.nees_dof),
+            ) {
+                (0, Ok(lo), Ok(hi)) => {
+                    self.nees_dof = s.nees_dof;
+                    self.nees_bounds = (lo, hi);
+                }
+                _ => self.mixed_dof = true,
+            }
+        }
         self.steps += 1;
         self.sim_time = s.time;
         let e2 = s.position_error_sq();
         self.sq_pos += e2;
-        self.sq_heading += s.heading_error * s.heading_error;
+        if !s.heading_error.is_nan() {
+            self.sq_heading += s.heading_error * s.heading_error;
+            self.heading_errors.push(s.heading_error);
+        }
         self.max_pos = self.max_pos.max(e2.sqrt());
         if let Some((pos, heading_err)) = s.odometry {
             let o2: f64 = (0..3).map(|i| (s.truth[i] - pos[i]).powi(2)).sum();
             self.odo_n += 1;
             self.odo_sq_pos += o2;
-            self.odo_sq_heading += heading_err * heading_err;
+            if !heading_err.is_nan() {
+                self.odo_sq_heading += heading_err * heading_err;
+                self.odo_heading_n += 1;
+            }
             self.odo_max_pos = self.odo_max_pos.max(o2.sqrt());
         }
         self.nees_sum += s.nees;
@@ -279,6 +333,8 @@ impl Tally {
             s.heading_error,
         ];
         let variances = [s.covariance[0][0], s.covariance[1][1], s.covariance[2][2]];
+        // A NaN heading error (no heading in the truth) counts nowhere: its
+        // share is over the steps with a heading.
         for ((count, e), v) in self.within_3_sigma.iter_mut().zip(errors).zip(variances) {
             if e * e <= 9.0 * v {
                 *count += 1;
@@ -302,23 +358,25 @@ impl Tally {
         } else {
             f64::NAN
         };
-        let (odo_pos, odo_heading, odo_max) = if self.odo_n > 0 {
+        let (odo_pos, odo_max) = if self.odo_n > 0 {
             let m = self.odo_n as f64;
-            (
-                (self.odo_sq_pos / m).sqrt(),
-                (self.odo_sq_heading / m).sqrt(),
-                self.odo_max_pos,
-            )
+            ((self.odo_sq_pos / m).sqrt(), self.odo_max_pos)
         } else {
-            (f64::NAN, f64::NAN, f64::NAN)
+            (f64::NAN, f64::NAN)
         };
+        let odo_heading = (self.odo_sq_heading / nonzero(self.odo_heading_n)).sqrt();
+        let heading_n = nonzero(self.heading_errors.len());
+        let (offset, about_offset) = heading_offset(&self.heading_errors);
+        let nees_n = if self.mixed_dof { f64::NAN } else { n };
         let wall_clock = self.started.elapsed().as_secs_f64();
         Summary {
             steps: self.steps,
             sim_time: self.sim_time,
             laps_completed,
             ekf_position_rmse: (self.sq_pos / n).sqrt(),
-            ekf_heading_rmse: (self.sq_heading / n).sqrt(),
+            ekf_heading_rmse: (self.sq_heading / heading_n).sqrt(),
+            ekf_heading_offset: offset,
+            ekf_heading_rmse_about_offset: about_offset,
             ekf_max_position_error: if self.steps > 0 {
                 self.max_pos
             } else {
@@ -327,10 +385,14 @@ impl Tally {
             odometry_position_rmse: odo_pos,
             odometry_heading_rmse: odo_heading,
             odometry_max_position_error: odo_max,
-            mean_nees: self.nees_sum / n,
+            mean_nees: self.nees_sum / nees_n,
             nees_dof: self.nees_dof,
-            nees_in_interval: self.nees_in as f64 / n,
-            within_3_sigma: self.within_3_sigma.map(|c| c as f64 / n),
+            nees_in_interval: self.nees_in as f64 / nees_n,
+            within_3_sigma: [
+                self.within_3_sigma[0] as f64 / n,
+                self.within_3_sigma[1] as f64 / n,
+                self.within_3_sigma[2] as f64 / heading_n,
+            ],
             readings: self.readings,
             associated: self.associated,
             corrections: self.corrections,
@@ -349,9 +411,108 @@ impl Tally {
     }
 }
 
+/// `n` as a divisor: NaN for 0, so that a mean over nothing is NaN.
+#[allow(clippy::cast_precision_loss)]
+fn nonzero(n: usize) -> f64 {
+    if n > 0 { n as f64 } else { f64::NAN }
+}
+
+/// The circular mean of wrapped heading errors (rad, in (-pi, pi]) and
+/// the RMS of the errors minus it, each difference wrapped (rad); both NaN
+/// for no errors (or errors whose mean direction is undefined).
+#[must_use]
+pub fn heading_offset(errors: &[f64]) -> (f64, f64) {
+    let (sin, cos) = errors
+        .iter()
+        .fold((0.0, 0.0), |(s, c), e| (s + e.sin(), c + e.cos()));
+    if errors.is_empty() || (sin == 0.0 && cos == 0.0) {
+        return (f64::NAN, f64::NAN);
+    }
+    let offset = locus_core::wrap_angle(sin.atan2(cos));
+    let sq: f64 = errors
+        .iter()
+        .map(|e| locus_core::wrap_angle(e - offset).powi(2))
+        .sum();
+    (offset, (sq / nonzero(errors.len())).sqrt())
+}
+
 #[cfg(test)]
 mod tests {
-    use super::Tally;
+    use super::{Sample, Tally};
+    use locus_core::nalgebra::{Matrix3, Vector3};
+    use locus_core::{Belief, Pose, wrap_angle};
+
+    /// A sample of an estimate at `(x, y, theta)` with covariance
+    /// `diag(0.01, 0.01, 0.0025)` against `truth`, odometry at the truth.
+    fn sample(k: usize, truth: &Pose<f64>, x: f64, y: f64, theta: f64) -> Sample {
+        let belief = Belief::new(
+            Vector3::new(x, y, theta),
+            Matrix3::from_diagonal(&Vector3::new(0.01, 0.01, 0.0025)),
+        );
+        Sample::planar(k, k as f64, truth, &belief, Some(truth), None, false)
+    }
+
+    /// A truth whose heading frame is turned by a constant 0.7 rad from the
+    /// robot's: the heading RMSE as is reads about 0.7 rad, about its offset
+    /// about 0 (here the estimate's own small errors), and the offset is
+    /// recovered, across the +-pi wrap too.
+    #[test]
+    fn a_constant_heading_offset_is_recovered_and_taken_out() {
+        for offset in [0.7, -3.0] {
+            let mut t = Tally::new(3).unwrap();
+            for k in 0..200 {
+                let theta = wrap_angle(0.05 * k as f64);
+                // The estimate's own heading error: +-0.01 rad, mean 0.
+                let own = if k % 2 == 0 { 0.01 } else { -0.01 };
+                let truth = Pose::new(0.1 * k as f64, 1.0, wrap_angle(theta + offset));
+                t.push(&sample(
+                    k,
+                    &truth,
+                    truth.x,
+                    truth.y,
+                    wrap_angle(theta - own),
+                ));
+            }
+            let s = t.summary(0);
+            assert!((s.ekf_heading_offset - offset).abs() < 1e-9, "{s:?}");
+            assert!(
+                (s.ekf_heading_rmse_about_offset - 0.01).abs() < 1e-9,
+                "{s:?}"
+            );
+            assert!((s.ekf_heading_rmse - offset.abs()).abs() < 0.02, "{s:?}");
+        }
+    }
+
+    /// A truth with no heading: heading figures NaN (never 0), the NEES
+    /// over the 2 position dof.
+    #[test]
+    fn a_truth_without_heading_is_compared_in_position_only() {
+        let mut t = Tally::new(3).unwrap();
+        for k in 0..10 {
+            let truth = Pose::new(1.0, 2.0, f64::NAN);
+            let s = sample(k, &truth, 1.1, 2.0, 0.4);
+            assert_eq!(s.nees_dof, 2);
+            assert!((s.nees - 1.0).abs() < 1e-12, "0.1^2 / 0.01 = 1: {}", s.nees);
+            t.push(&s);
+        }
+        let s = t.summary(0);
+        assert_eq!(s.nees_dof, 2);
+        assert!((s.mean_nees - 1.0).abs() < 1e-12);
+        assert!((s.ekf_position_rmse - 0.1).abs() < 1e-12);
+        assert_eq!(s.within_3_sigma[..2], [1.0, 1.0]);
+        for v in [
+            s.ekf_heading_rmse,
+            s.ekf_heading_offset,
+            s.ekf_heading_rmse_about_offset,
+            s.odometry_heading_rmse,
+            s.within_3_sigma[2],
+        ] {
+            assert!(v.is_nan(), "{s:?}");
+        }
+        // Samples of both kinds in one tally: no mean NEES.
+        t.push(&sample(10, &Pose::new(1.0, 2.0, 0.0), 1.0, 2.0, 0.0));
+        assert!(t.summary(0).mean_nees.is_nan());
+    }
 
     /// A run compared with no truth (a log without ground truth) has no
     /// error figures: they read "n/a" (NaN, `null` in JSON), never 0.
@@ -361,6 +522,12 @@ mod tests {
         for (name, v) in [
             ("ekf_position_rmse", s.ekf_position_rmse),
             ("ekf_heading_rmse", s.ekf_heading_rmse),
+            ("ekf_heading_offset", s.ekf_heading_offset),
+            (
+                "ekf_heading_rmse_about_offset",
+                s.ekf_heading_rmse_about_offset,
+            ),
+            ("within_3_sigma heading", s.within_3_sigma[2]),
             ("ekf_max_position_error", s.ekf_max_position_error),
             ("odometry_position_rmse", s.odometry_position_rmse),
             ("mean_nees", s.mean_nees),

@@ -75,6 +75,16 @@ pub enum RecordProblem {
         /// The line of its first appearance.
         first_line: usize,
     },
+    /// Records that must agree with each other do not (truth lines with and
+    /// without a heading in one file; a beacon at two positions).
+    #[error("{what} line {first_line}")]
+    Disagrees {
+        /// What disagrees, ending in words that lead to the line, e.g.
+        /// "truth lines give a heading or none, all alike: this one differs from".
+        what: &'static str,
+        /// The earlier line it disagrees with.
+        first_line: usize,
+    },
 }
 
 /// Bytes of a field's text quoted in an error at most: a field of

@@ -3,6 +3,7 @@
 
 pub mod decimal;
 pub mod error;
+pub mod librsf;
 pub mod locus_csv;
 pub mod mrclam;
 pub mod noise;

@@ -11,11 +11,13 @@
 //! | `start` | t, x, y, theta | s, m, m, rad |
 //! | `odometry` | t, v, omega | s, m/s, rad/s |
 //! | `measurement` | t, id, range, bearing | s, -, m (>= 0), rad |
-//! | `truth` | t, x, y, theta | s, m, m, rad |
+//! | `range` | t, id, range | s, -, m (>= 0) (version 3: range only) |
+//! | `truth` | t, x, y, theta or t, x, y | s, m, m, rad (version 3: theta optional) |
 //!
 //! Lines starting with `#` and blank lines are skipped. Odometry and truth
-//! times must not decrease; measurements are listed in the order the robot
-//! **received** them, so their times may go back (a late measurement);
+//! times must not decrease; truth lines all give a heading or none;
+//! measurements (`measurement` and `range` lines) are listed in the order
+//! the robot **received** them, so their times may go back (a late measurement);
 //! landmark ids are unique; `start` and `sensor` appear at most once, and
 //! each noise name at most once. Measurements are taken by the sensor of the
 //! `sensor` line (at the robot's centre, along its heading, if there is
@@ -41,7 +43,8 @@ pub struct MapLandmark {
     pub y: f64,
 }
 
-/// One `measurement` line: a range and bearing to a landmark.
+/// One `measurement` line (a range and bearing to a landmark) or `range`
+/// line (a range alone, `bearing` `None`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LandmarkMeasurement {
     /// Time the measurement was taken, s.
@@ -50,8 +53,9 @@ pub struct LandmarkMeasurement {
     pub id: u32,
     /// Range from the sensor's origin, m (>= 0).
     pub range: f64,
-    /// Bearing from the sensor's x axis, counter-clockwise positive, rad.
-    pub bearing: f64,
+    /// Bearing from the sensor's x axis, counter-clockwise positive, rad;
+    /// `None` for a `range` line.
+    pub bearing: Option<f64>,
 }
 
 /// A whole Locus log.
@@ -68,14 +72,16 @@ pub struct LocusLog {
     pub start: Option<TruthPose>,
     /// Odometry (velocities held until the next record), time order.
     pub odometry: Vec<Odometry>,
-    /// Measurements in the order received (times may go back).
+    /// Measurements (`measurement` and `range` lines) in the order received
+    /// (times may go back).
     pub measurements: Vec<LandmarkMeasurement>,
-    /// Ground truth (empty if the log has none), time order.
+    /// Ground truth (empty if the log has none), time order; positions only
+    /// ([`Groundtruth::positions`]) if its lines give no heading.
     pub truth: Groundtruth,
 }
 
 /// The kinds a line may start with.
-const KINDS: &str = "one of sensor, noise, landmark, start, odometry, measurement, truth";
+const KINDS: &str = "one of sensor, noise, landmark, start, odometry, measurement, range, truth";
 
 /// The names a `noise` line may give.
 const NOISE_NAMES: &str = "one of q_v, q_omega, sigma_range, sigma_bearing";
@@ -98,7 +104,8 @@ pub fn parse(text: &str, path: &Path) -> Result<LocusLog> {
     parse_with_lines(text, path).map(|(log, _)| log)
 }
 
-/// As [`parse`], with the line (1-based) of each measurement, in the order
+/// As [`parse`], with the line (1-based) of each measurement (`measurement`
+/// or `range` line), in the order
 /// of [`LocusLog::measurements`]: what a reader of the log names when it
 /// refuses one.
 ///
@@ -111,6 +118,8 @@ pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Vec<usize>
     let mut odometry_order = TimeOrder::new();
     let mut truth_order = TimeOrder::new();
     let mut truth: Vec<TruthPose> = Vec::new();
+    // The first truth line and whether it gives a heading.
+    let mut truth_heading: Option<(usize, bool)> = None;
     let mut start_line: Option<usize> = None;
     let mut sensor_line: Option<usize> = None;
     // The line of each noise name's record, in the order of NoiseRecords::NAMES.
@@ -203,17 +212,47 @@ pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Vec<usize>
                     time: f.f64("time")?,
                     id: f.u32("id")?,
                     range: f.non_negative("range")?,
-                    bearing: f.f64("bearing")?,
+                    bearing: Some(f.f64("bearing")?),
                 };
                 f.end(5)?;
                 log.measurements.push(m);
                 measurement_lines.push(line);
             }
+            "range" => {
+                let m = LandmarkMeasurement {
+                    time: f.f64("time")?,
+                    id: f.u32("id")?,
+                    range: f.non_negative("range")?,
+                    bearing: None,
+                };
+                f.end(4)?;
+                log.measurements.push(m);
+                measurement_lines.push(line);
+            }
             "truth" => {
-                let p = pose(&mut f)?;
-                truth_order.check(&f, p.time)?;
+                let time = f.f64("time")?;
+                let x = f.f64("x")?;
+                let y = f.f64("y")?;
+                let theta = f.optional_f64("theta")?;
+                truth_order.check(&f, time)?;
+                let heading = theta.is_some();
+                match truth_heading {
+                    None => truth_heading = Some((line, heading)),
+                    Some((first_line, h)) if h != heading => {
+                        return Err(f.record_error(RecordProblem::Disagrees {
+                            what: "truth lines give a heading or none, all alike: this one differs from",
+                            first_line,
+                        }));
+                    }
+                    Some(_) => {}
+                }
                 f.end(5)?;
-                truth.push(p);
+                truth.push(TruthPose {
+                    time,
+                    x,
+                    y,
+                    theta: theta.unwrap_or(0.0),
+                });
             }
             other => {
                 return Err(f.field_error(
@@ -227,7 +266,12 @@ pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Vec<usize>
         }
     }
     // Times were checked not to decrease.
-    log.truth = Groundtruth::new(truth).unwrap_or_default();
+    log.truth = if matches!(truth_heading, Some((_, false))) {
+        Groundtruth::positions(truth)
+    } else {
+        Groundtruth::new(truth)
+    }
+    .unwrap_or_default();
     Ok((log, measurement_lines))
 }
 
@@ -273,7 +317,7 @@ pub fn write(log: &LocusLog) -> String {
     use core::fmt::Write as _;
     let lines = 1 + log.landmarks.len() + log.truth.poses().len() + log.odometry.len();
     let mut s = String::with_capacity(64 * (lines + log.measurements.len()));
-    s.push_str("# Locus log v2 (docs/log-format.md); SI units\n");
+    s.push_str("# Locus log v3 (docs/log-format.md); SI units\n");
     if let Some(m) = log.sensor {
         record(&mut s, "sensor", &[m.x, m.y, m.yaw]);
     }
@@ -289,17 +333,29 @@ pub fn write(log: &LocusLog) -> String {
     if let Some(p) = log.start {
         record(&mut s, "start", &[p.time, p.x, p.y, p.theta]);
     }
+    let heading = log.truth.has_heading();
     for p in log.truth.poses() {
-        record(&mut s, "truth", &[p.time, p.x, p.y, p.theta]);
+        if heading {
+            record(&mut s, "truth", &[p.time, p.x, p.y, p.theta]);
+        } else {
+            record(&mut s, "truth", &[p.time, p.x, p.y]);
+        }
     }
     for o in &log.odometry {
         record(&mut s, "odometry", &[o.time, o.v, o.omega]);
     }
     for m in &log.measurements {
-        s.push_str("measurement,");
+        s.push_str(if m.bearing.is_some() {
+            "measurement,"
+        } else {
+            "range,"
+        });
         push_f64(&mut s, m.time);
         let _ = write!(s, ",{}", m.id);
-        record(&mut s, "", &[m.range, m.bearing]);
+        match m.bearing {
+            Some(b) => record(&mut s, "", &[m.range, b]),
+            None => record(&mut s, "", &[m.range]),
+        }
     }
     s
 }
@@ -361,7 +417,7 @@ mod tests {
             }
         );
         let written = write(&log);
-        assert!(written.starts_with("# Locus log v2"), "{written}");
+        assert!(written.starts_with("# Locus log v3"), "{written}");
         assert!(
             written.contains("\nsensor,0.1,-0.02,1.5707963267948966\n"),
             "{written}"
@@ -469,6 +525,72 @@ mod tests {
         assert_eq!(
             message("noise,sigma_bearing,0.1\n\nnoise,sigma_bearing,0.1\n"),
             "log.csv:3: noise sigma_bearing already appeared on line 1"
+        );
+    }
+
+    #[test]
+    fn range_lines_and_truth_without_heading_read_and_round_trip() {
+        let text = "# Locus log v3\nsensor,0.1,0,0\nlandmark,105,-0.02,-0.01\nodometry,0,0.1,0\n\
+                    range,0.13,105,2.955\nmeasurement,0.2,105,2.9,0.5\nrange,0.1,105,0\n\
+                    truth,0,1.65,2.22\ntruth,0.13,1.66,2.21\n";
+        let (log, lines) = parse_with_lines(text, p()).unwrap();
+        assert_eq!(lines, [5, 6, 7]);
+        assert_eq!(
+            log.measurements[0],
+            LandmarkMeasurement {
+                time: 0.13,
+                id: 105,
+                range: 2.955,
+                bearing: None
+            }
+        );
+        assert_eq!(log.measurements[1].bearing, Some(0.5));
+        assert!(!log.truth.has_heading());
+        assert!(log.truth.pose_at(0.05, 1.0).unwrap().theta.is_nan());
+        assert!((log.truth.pose_at(0.13, 1.0).unwrap().x - 1.66).abs() < 1e-12);
+        let written = write(&log);
+        assert!(written.contains("\nrange,0.13,105,2.955\n"), "{written}");
+        assert!(written.contains("\ntruth,0.13,1.66,2.21\n"), "{written}");
+        assert_eq!(parse(&written, p()).unwrap(), log);
+        // Truth with a heading stays so.
+        let log = parse("truth,0,1,2,0.5\n", p()).unwrap();
+        assert!(log.truth.has_heading());
+        assert_eq!(log.truth.pose_at(0.0, 1.0).unwrap().theta, 0.5);
+    }
+
+    #[test]
+    fn malformed_range_and_truth_lines_name_the_line_and_field() {
+        assert_eq!(
+            message("range,1,105\n"),
+            "log.csv:1: field \"range\" (column 4): missing"
+        );
+        assert_eq!(
+            message("range,1,105,-0.5\n"),
+            "log.csv:1: field \"range\" (column 4): -0.5 is out of range: >= 0"
+        );
+        assert_eq!(
+            message("range,1,b105,0.5\n"),
+            "log.csv:1: field \"id\" (column 3): \"b105\" is not a non-negative integer"
+        );
+        assert_eq!(
+            message("range,1,105,0.5,0.1\n"),
+            "log.csv:1: 5 fields, the format has 4"
+        );
+        assert_eq!(
+            message("truth,0,1\n"),
+            "log.csv:1: field \"y\" (column 4): missing"
+        );
+        assert_eq!(
+            message("truth,0,1,2,x\n"),
+            "log.csv:1: field \"theta\" (column 5): \"x\" is not a number"
+        );
+        assert_eq!(
+            message("truth,0,1,2\n\ntruth,1,1,2,0.3\n"),
+            "log.csv:3: truth lines give a heading or none, all alike: this one differs from line 1"
+        );
+        assert_eq!(
+            message("truth,0,1,2,0\ntruth,1,1,2\n"),
+            "log.csv:2: truth lines give a heading or none, all alike: this one differs from line 1"
         );
     }
 

@@ -134,7 +134,9 @@ pub struct TruthPose {
     /// y in the world frame, m.
     pub y: f64,
     /// Heading from the world x axis, counter-clockwise, rad (as recorded:
-    /// within (-pi, pi]).
+    /// within (-pi, pi]). In a track of positions only
+    /// ([`Groundtruth::positions`]) its stored value is 0 and unused, and
+    /// the track's lookups return NaN ("no heading").
     pub theta: f64,
 }
 
@@ -209,10 +211,14 @@ impl Sightings {
     }
 }
 
-/// A robot's ground-truth track: poses in non-decreasing time order.
+/// A robot's ground-truth track: poses in non-decreasing time order, with
+/// a heading (MRCLAM's Vicon) or positions only (a tracker that gives no
+/// heading, such as the UWB dataset's).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Groundtruth {
     poses: Vec<TruthPose>,
+    /// Whether the track gives positions only (its poses' `theta` unused).
+    position_only: bool,
 }
 
 impl Groundtruth {
@@ -222,10 +228,33 @@ impl Groundtruth {
         poses
             .windows(2)
             .all(|w| w[0].time <= w[1].time)
-            .then_some(Self { poses })
+            .then_some(Self {
+                poses,
+                position_only: false,
+            })
     }
 
-    /// The poses.
+    /// A track of positions only, with no heading: as [`Groundtruth::new`]
+    /// (times must not decrease, else `None`); each pose's `theta` is set to
+    /// 0 and unused, and [`Groundtruth::pose_at`] returns NaN for it.
+    pub fn positions(mut poses: Vec<TruthPose>) -> Option<Self> {
+        for p in &mut poses {
+            p.theta = 0.0;
+        }
+        let mut track = Self::new(poses)?;
+        track.position_only = !track.poses.is_empty();
+        Some(track)
+    }
+
+    /// Whether the track has a heading (false for a track of positions
+    /// only; true for an empty one).
+    #[must_use]
+    pub fn has_heading(&self) -> bool {
+        !self.position_only
+    }
+
+    /// The poses (their `theta` is 0 and unused if the track has no
+    /// heading, [`Groundtruth::has_heading`]).
     pub fn poses(&self) -> &[TruthPose] {
         &self.poses
     }
@@ -239,7 +268,8 @@ impl Groundtruth {
     /// samples around `t` (theta along the shorter way round, result wrapped
     /// to (-pi, pi]). `None` if `t` is outside the track or the two samples
     /// are more than `max_gap` seconds apart (a gap in the coverage). A `t`
-    /// equal to a sample's time returns that sample.
+    /// equal to a sample's time returns that sample. A track with no
+    /// heading gives theta NaN.
     pub fn pose_at(&self, t: f64, max_gap: f64) -> Option<TruthPose> {
         interpolate(
             &self.poses,
@@ -247,6 +277,15 @@ impl Groundtruth {
             t,
             max_gap,
         )
+        .map(|p| self.headed(p))
+    }
+
+    /// `p` with theta NaN if the track has no heading.
+    pub(crate) fn headed(&self, mut p: TruthPose) -> TruthPose {
+        if self.position_only {
+            p.theta = f64::NAN;
+        }
+        p
     }
 
     /// A cursor for looking poses up at times that mostly do not decrease
@@ -255,7 +294,7 @@ impl Groundtruth {
     /// instead of searching the whole track each time.
     #[must_use]
     pub fn cursor(&self) -> TruthCursor<'_> {
-        TruthCursor::new(&self.poses)
+        TruthCursor::new(self)
     }
 }
 
@@ -379,7 +418,10 @@ pub fn parse_groundtruth(text: &str, path: &Path) -> Result<Groundtruth> {
             theta: f.f64("theta")?,
         })
     })?;
-    Ok(Groundtruth { poses })
+    Ok(Groundtruth {
+        poses,
+        position_only: false,
+    })
 }
 
 /// Parses the text of `RobotN_Odometry.dat`; `path` names it in errors.

@@ -12,7 +12,9 @@ pub struct Landmark {
     pub y: f64,
 }
 
-/// A range-bearing sighting of a landmark.
+/// A sighting of a landmark: its range, and its bearing if the sensor
+/// gives one (a camera's range-bearing sighting; a UWB radio's range-only
+/// sighting of a beacon has none).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sighting {
     /// Time the sighting was taken, s: the filter applies it at this time.
@@ -26,6 +28,16 @@ pub struct Sighting {
     /// unless the log places the sensor elsewhere, see [`crate::SensorMount`]).
     pub range: f64,
     /// Bearing from the landmark sensor's x axis (the robot's heading unless
-    /// the log places the sensor elsewhere), counter-clockwise positive, rad.
-    pub bearing: f64,
+    /// the log places the sensor elsewhere), counter-clockwise positive, rad;
+    /// `None` for a range-only sighting.
+    pub bearing: Option<f64>,
+}
+
+impl Sighting {
+    /// Components the sighting measures: 2 (range and bearing) or 1 (range
+    /// alone): the degrees of freedom of its NIS.
+    #[must_use]
+    pub fn dof(&self) -> u32 {
+        if self.bearing.is_some() { 2 } else { 1 }
+    }
 }

@@ -208,10 +208,25 @@ impl<'a> Fields<'a> {
     /// The next field as a finite number.
     pub(crate) fn f64(&mut self, field: &'static str) -> Result<f64> {
         let text = self.next_text(field)?;
+        self.number(field, text)
+    }
+
+    /// `text` (the field just read) as a finite number.
+    fn number(&self, field: &'static str, text: &str) -> Result<f64> {
         match text.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
             Ok(_) => Err(self.field_error(field, FieldProblem::NotFinite(excerpt(text)))),
             Err(_) => Err(self.field_error(field, FieldProblem::NotANumber(excerpt(text)))),
+        }
+    }
+
+    /// The next field as a finite number, or `None` if the line ends
+    /// before it (an optional last field).
+    pub(crate) fn optional_f64(&mut self, field: &'static str) -> Result<Option<f64>> {
+        self.column += 1;
+        match self.it.next() {
+            Some(text) => self.number(field, text).map(Some),
+            None => Ok(None),
         }
     }
 

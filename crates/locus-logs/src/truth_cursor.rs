@@ -10,7 +10,7 @@
 //!
 //! [`Groundtruth::pose_at`]: crate::mrclam::Groundtruth::pose_at
 
-use crate::mrclam::{TruthPose, interpolate};
+use crate::mrclam::{Groundtruth, TruthPose, interpolate};
 
 /// Samples walked forward one by one before a lookup switches to a binary
 /// search of the rest of the track.
@@ -23,6 +23,8 @@ const WALK: usize = 8;
 /// [`Groundtruth::cursor`]: crate::mrclam::Groundtruth::cursor
 #[derive(Debug, Clone)]
 pub struct TruthCursor<'a> {
+    /// The track.
+    track: &'a Groundtruth,
     /// The track's poses, in non-decreasing time order.
     poses: &'a [TruthPose],
     /// The index of the first pose later than the previous lookup's time
@@ -32,22 +34,25 @@ pub struct TruthCursor<'a> {
 }
 
 impl<'a> TruthCursor<'a> {
-    /// A cursor at the start of `poses` (non-decreasing times, as in a
-    /// `Groundtruth`).
-    pub(crate) fn new(poses: &'a [TruthPose]) -> Self {
-        Self { poses, after: 0 }
+    /// A cursor at the start of `track`.
+    pub(crate) fn new(track: &'a Groundtruth) -> Self {
+        Self {
+            track,
+            poses: track.poses(),
+            after: 0,
+        }
     }
 
     /// The pose at time `t` (s): exactly what [`Groundtruth::pose_at`]
     /// returns for `t` and `max_gap` (s) (linear interpolation, theta the
-    /// short way round; `None` outside the track or across a gap wider than
-    /// `max_gap`), at the cost of a few comparisons when `t` is at or a
+    /// short way round, NaN for a track with no heading; `None` outside the
+    /// track or across a gap wider than `max_gap`), at the cost of a few comparisons when `t` is at or a
     /// little after the previous lookup's time.
     ///
     /// [`Groundtruth::pose_at`]: crate::mrclam::Groundtruth::pose_at
     pub fn pose_at(&mut self, t: f64, max_gap: f64) -> Option<TruthPose> {
         self.after = self.seek(t);
-        interpolate(self.poses, self.after, t, max_gap)
+        interpolate(self.poses, self.after, t, max_gap).map(|p| self.track.headed(p))
     }
 
     /// The index of the first pose whose time is `> t` (`poses.len()` if

@@ -1,4 +1,5 @@
-//! `locus_csv::parse(write(log)) == log` for random logs: every record kind,
+//! `locus_csv::parse(write(log)) == log` for random logs: every record kind
+//! (range-bearing and range-only sightings, truth with or without heading),
 //! with or without a sensor line and each noise record, numbers anywhere in
 //! the finite range (subnormals, huge and tiny exponents, -0.0).
 
@@ -56,19 +57,28 @@ fn log() -> impl Strategy<Value = LocusLog> {
         o.sort_by(|a, b| a.time.total_cmp(&b.time));
         o
     });
-    let measurement =
-        (finite(), any::<u32>(), finite(), finite()).prop_map(|(time, id, r, bearing)| {
-            LandmarkMeasurement {
-                time,
-                id,
-                range: r.abs(),
-                bearing,
+    let measurement = (
+        finite(),
+        any::<u32>(),
+        finite(),
+        proptest::option::of(finite()),
+    )
+        .prop_map(|(time, id, r, bearing)| LandmarkMeasurement {
+            time,
+            id,
+            range: r.abs(),
+            bearing,
+        });
+    // With a heading, or positions only (version 3).
+    let truth =
+        (proptest::collection::vec(pose(), 0..8), any::<bool>()).prop_map(|(mut v, heading)| {
+            v.sort_by(|a, b| a.time.total_cmp(&b.time));
+            if heading {
+                Groundtruth::new(v).expect("sorted")
+            } else {
+                Groundtruth::positions(v).expect("sorted")
             }
         });
-    let truth = proptest::collection::vec(pose(), 0..8).prop_map(|mut v| {
-        v.sort_by(|a, b| a.time.total_cmp(&b.time));
-        Groundtruth::new(v).expect("sorted")
-    });
     (
         sensor,
         noise,

@@ -3,6 +3,7 @@
 #![forbid(unsafe_code)]
 
 pub mod association;
+pub mod calibrated_range;
 pub mod calibrated_range_bearing;
 pub mod calibrated_unicycle;
 pub mod camera;

@@ -11,15 +11,18 @@
 //! limit too: the clamp acts on the reading, `W` stays exact); unicycle
 //! |v| <= 1 m/s, |omega| <= 3 rad/s and separately |omega| <= 1e-4 rad/s
 //! (including 0), dt 1 ms-0.5 s; range-bearing with the landmark 0.2-8 m from
-//! a sensor mounted up to 0.3 m off the centre.
+//! a sensor mounted up to 0.3 m off the centre, and the range-only
+//! model on the calibrated 7-state with the same geometry.
 
 use core::f64::consts::PI;
 
 use locus_core::jacobian_check::{
     DEFAULT_STEP, DEFAULT_TOLERANCE, check_measurement_model, check_motion_model,
 };
+use locus_core::nalgebra::SVector;
 use locus_core::nalgebra::{Vector2, Vector3};
 use locus_core::{MeasurementModel, MotionModel};
+use locus_models::calibrated_range::CalibratedRange;
 use locus_models::range_bearing::RangeBearing;
 use locus_models::tricycle::{
     CountNoise, FrontReading, RearCounts, TricycleFront, TricycleRear, counts_per_rev,
@@ -102,6 +105,22 @@ proptest! {
         let state = Vector3::new(x, y, th);
         let (p, _) = base.sensor_world(&state);
         let model = base.with_landmark(p + range * Vector2::new(dir.cos(), dir.sin()));
+        let checked = check_measurement_model(&model, &state, DEFAULT_STEP, DEFAULT_TOLERANCE);
+        prop_assert_eq!(checked, Ok(true));
+    }
+
+    #[test]
+    fn calibrated_range_h_matches_finite_differences(
+        x in -5.0..5.0f64, y in -5.0..5.0f64, th in -PI..PI,
+        range in 0.2..8.0f64, dir in -PI..PI,
+        sx in -0.3..0.3f64, sy in -0.3..0.3f64,
+        s_v in 0.8..1.2f64, s_omega in 0.8..1.2f64, b_omega in -0.05..0.05f64, b_bearing in -0.1..0.1f64,
+    ) {
+        // A range-only beacon `range` from the mounted sensor, in direction `dir`.
+        let base = RangeBearing::new(Vector2::zeros(), Vector2::new(sx, sy), 0.05, 1.0);
+        let (p, _) = base.sensor_world(&Vector3::new(x, y, th));
+        let model = CalibratedRange { inner: base.with_landmark(p + range * Vector2::new(dir.cos(), dir.sin())) };
+        let state = SVector::<f64, 7>::from([x, y, th, s_v, s_omega, b_omega, b_bearing]);
         let checked = check_measurement_model(&model, &state, DEFAULT_STEP, DEFAULT_TOLERANCE);
         prop_assert_eq!(checked, Ok(true));
     }

@@ -57,6 +57,66 @@ pub fn inlier_tolerance(range: f64) -> f64 {
     0.3 + 0.1 * range
 }
 
+/// Distance the ground truth must move from its position at the first
+/// odometry time before its direction of motion gives the initial heading
+/// of a truth of positions only ([`heading_from_truth`]), m.
+pub const HEADING_BASELINE: f64 = 0.3;
+
+/// Seconds after the first odometry time within which the truth must have
+/// moved [`HEADING_BASELINE`] for [`heading_from_truth`].
+pub const HEADING_WINDOW: f64 = 30.0;
+
+/// Standard deviation assumed for the heading [`heading_from_truth`] finds
+/// when the robot drove straight, rad; a turn adds a quarter of the angle
+/// turned (the odometry's turn-rate error, assumed up to 25 %).
+pub const HEADING_STD: f64 = 0.1;
+
+/// The initial heading found from a ground truth of positions only.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TruthHeading {
+    /// The heading at the first odometry time, rad.
+    pub heading: f64,
+    /// Its standard deviation as assumed ([`HEADING_STD`]), rad.
+    pub std: f64,
+    /// How far the truth moved over the baseline, m.
+    pub travelled: f64,
+    /// From the first odometry time to the end of the baseline, s.
+    pub span: f64,
+}
+
+/// The heading at the first odometry time `t0` (s) of a log whose ground
+/// truth has positions only: the direction in which the truth moves from
+/// its position at `t0` to its first position at least [`HEADING_BASELINE`]
+/// away (within [`HEADING_WINDOW`] s), minus the direction in which dead
+/// reckoning on the logged odometry (from heading 0, its delay and initial
+/// calibration as `cfg` sets them) moves over the same time. A robot that
+/// turned on the way is thereby accounted for to the odometry's accuracy.
+/// `None` if the truth does not cover `t0`, does not move that far in time,
+/// or the odometry moves less than half as far (it disagrees with the
+/// truth about whether the robot moved).
+#[must_use]
+pub fn heading_from_truth(log: &Log, cfg: &Config, t0: f64) -> Option<TruthHeading> {
+    let start = log.truth.pose_at(t0, cfg.truth_max_gap)?;
+    let end = log
+        .truth
+        .poses()
+        .iter()
+        .filter(|p| p.time > t0 && p.time <= t0 + HEADING_WINDOW)
+        .find(|p| (p.x - start.x).hypot(p.y - start.y) >= HEADING_BASELINE)?;
+    let (dx, dy) = (end.x - start.x, end.y - start.y);
+    let dead = DeadReckoning::new(log, cfg, Vector3::zeros(), t0).advance(end.time);
+    let travelled = dx.hypot(dy);
+    if dead[0].hypot(dead[1]) < 0.5 * travelled {
+        return None;
+    }
+    Some(TruthHeading {
+        heading: wrap_angle(dy.atan2(dx) - dead[1].atan2(dead[0])),
+        std: HEADING_STD + 0.25 * dead[2].abs(),
+        travelled,
+        span: end.time - t0,
+    })
+}
+
 /// An initial pose found from sightings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Fix {
@@ -87,7 +147,9 @@ struct Pair {
 }
 
 /// The initial pose from the sightings of `log` (see the module
-/// documentation), or `None` if no window gives a fix.
+/// documentation), or `None` if no window gives a fix. Only sightings with
+/// a bearing are used: range-only sightings are skipped, so a log of
+/// range-only sightings alone gives `None`.
 #[must_use]
 pub fn from_sightings(log: &Log, cfg: &Config) -> Option<Fix> {
     let t0 = log.odometry.first()?.time;
@@ -112,8 +174,9 @@ pub fn fix_between(log: &Log, cfg: &Config, from: f64, to: f64) -> Option<Fix> {
     fit(&pairs[..pairs.len().min(MAX_SIGHTINGS)], from)
 }
 
-/// The usable sightings (landmark in the map, finite, in range, from the
-/// first odometry time on) in time order, with their landmarks carried to
+/// The usable sightings (landmark in the map, finite, in range, with a
+/// bearing: a range-only sighting cannot place its landmark in the robot's
+/// frame and is skipped; from the first odometry time on) in time order, with their landmarks carried to
 /// the start frame by dead reckoning on the logged odometry (its delay and
 /// initial calibration as `cfg` sets them).
 fn pairs(log: &Log, cfg: &Config, t0: f64, to: f64) -> Vec<Pair> {
@@ -124,7 +187,7 @@ fn pairs(log: &Log, cfg: &Config, t0: f64, to: f64) -> Vec<Pair> {
             s.time >= t0
                 && s.time <= to
                 && s.range.is_finite()
-                && s.bearing.is_finite()
+                && s.bearing.is_some_and(f64::is_finite)
                 && s.range <= cfg.max_range
                 && log.landmark(s.landmark).is_some()
         })
@@ -139,7 +202,10 @@ fn pairs(log: &Log, cfg: &Config, t0: f64, to: f64) -> Vec<Pair> {
         let Some(l) = log.landmark(s.landmark) else {
             continue;
         };
-        let a = mount.yaw + s.bearing - b_bearing;
+        let Some(bearing) = s.bearing else {
+            continue;
+        };
+        let a = mount.yaw + bearing - b_bearing;
         let in_robot = Vector2::new(mount.x + s.range * a.cos(), mount.y + s.range * a.sin());
         out.push(Pair {
             seen: Vector2::new(pose[0], pose[1]) + rotate(pose[2], in_robot),

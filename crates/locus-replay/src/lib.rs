@@ -22,7 +22,10 @@
 //! * **Correction.** Each landmark sighting is one range-bearing
 //!   correction from the sensor where the log's `sensor` record mounts it
 //!   ([`Log::sensor`]; the robot's centre by default), with the bearing
-//!   bias state ([`CalibratedRangeBearing`]), weighted as Student-t noise
+//!   bias state ([`CalibratedRangeBearing`]); a range-only sighting (a UWB
+//!   beacon's) is a 1-D range correction from the same sensor
+//!   ([`CalibratedRange`]), gated on chi-square with 1 dof; both weighted
+//!   as Student-t noise
 //!   ([`Config::robust_dof`]). Sightings of landmarks not in the map are
 //!   counted and skipped; robot-to-robot sightings never reach the replay
 //!   (the MRCLAM log splits them off).
@@ -43,7 +46,9 @@
 //!   states with no random walk are held: the inflation leaves them as
 //!   they are ([`locus_core::Recovery`]).
 //! * **Initial pose.** The log's start pose, else the ground truth at the
-//!   first odometry time, else the pose the first sightings fix
+//!   first odometry time (for a truth of positions only, its position and
+//!   the heading of its direction of motion, [`initial::heading_from_truth`],
+//!   if it moves), else the pose the first sightings fix
 //!   ([`initial`]); [`Config::start`] can ask for the last whatever the
 //!   log gives. [`Report::started_from`] says which.
 //! * **Ground truth.** Each event's estimate is compared with the ground
@@ -70,11 +75,12 @@ mod step;
 
 use locus_core::nalgebra::{SMatrix, SVector, Vector2, Vector3};
 use locus_core::{
-    Belief, ChiSquareGate, Ekf, MotionModel, Recovery, Rules, RunningFilter, StudentT, Track,
-    Update, wrap_angle,
+    Belief, ChiSquareGate, Ekf, MeasurementModel, MotionModel, Recovery, Rules, RunningFilter,
+    StudentT, Track, Update, wrap_angle,
 };
 use locus_eval::Tally;
-use locus_logs::mrclam::{Odometry, TruthCursor};
+use locus_logs::mrclam::{Odometry, TruthCursor, TruthPose};
+use locus_models::calibrated_range::CalibratedRange;
 use locus_models::calibrated_range_bearing::CalibratedRangeBearing;
 use locus_models::calibrated_unicycle::{BEARING_BIAS, OMEGA_BIAS, OMEGA_SCALE, V_SCALE};
 use locus_models::range_bearing::RangeBearing;
@@ -88,6 +94,10 @@ pub use step::{EventKind, SightingOutcome, Step, Unusable};
 /// Cap on one sighting's NIS in [`Report::innovation_nll`]: the 99.9 %
 /// point of chi-square with 2 degrees of freedom, `-2 ln 0.001`.
 pub const NIS_CAP: f64 = 13.815_510_557_964_274;
+
+/// Cap on a range-only sighting's NIS in [`Report::innovation_nll`]: the
+/// 99.9 % point of chi-square with 1 degree of freedom.
+pub const NIS_CAP_RANGE: f64 = 10.827_566_170_662_733;
 
 /// Errors of the replay.
 #[derive(Debug, thiserror::Error)]
@@ -176,11 +186,15 @@ impl Event {
             (Event::Odometry(_), Event::Odometry(_)) => Ordering::Equal,
             (Event::Odometry(_), Event::Sighting(..)) => Ordering::Less,
             (Event::Sighting(..), Event::Odometry(_)) => Ordering::Greater,
+            // Range-only sightings (no bearing) before range-bearing ones.
             (Event::Sighting(a, _), Event::Sighting(b, _)) => a
                 .landmark
                 .cmp(&b.landmark)
                 .then(a.range.total_cmp(&b.range))
-                .then(a.bearing.total_cmp(&b.bearing)),
+                .then(match (a.bearing, b.bearing) {
+                    (Some(x), Some(y)) => x.total_cmp(&y),
+                    (x, y) => x.is_some().cmp(&y.is_some()),
+                }),
         }
     }
 }
@@ -270,55 +284,98 @@ fn apply(
                 SightingOutcome::Unusable(Unusable::RangeAbove { max: cfg.max_range })
             }
             Some(l) => {
-                let model = CalibratedRangeBearing {
-                    inner: RangeBearing::new(
-                        Vector2::new(l.x, l.y),
-                        Vector2::new(log.sensor.x, log.sensor.y),
-                        cfg.sigma_range,
-                        cfg.sigma_bearing,
+                let inner = RangeBearing::new(
+                    Vector2::new(l.x, l.y),
+                    Vector2::new(log.sensor.x, log.sensor.y),
+                    cfg.sigma_range,
+                    cfg.sigma_bearing,
+                );
+                let outcome = match z.bearing {
+                    Some(bearing) => correct(
+                        cfg,
+                        rules,
+                        track,
+                        entry,
+                        &CalibratedRangeBearing {
+                            inner,
+                            yaw: log.sensor.yaw,
+                        },
+                        &Vector2::new(z.range, bearing),
+                        NIS_CAP,
+                        SMatrix::determinant,
                     ),
-                    yaw: log.sensor.yaw,
+                    None => correct(
+                        cfg,
+                        rules,
+                        track,
+                        entry,
+                        &CalibratedRange { inner },
+                        &SVector::<f64, 1>::new(z.range),
+                        NIS_CAP_RANGE,
+                        |s| s[(0, 0)],
+                    ),
                 };
-                let z = Vector2::new(z.range, z.bearing);
-                let update = match cfg.robust_dof.map(StudentT::new) {
-                    Some(Ok(t)) => track.correct_robust(rules, &t, &model, &z),
-                    _ => track.correct(rules, &model, &z),
-                };
-                // A correction that fails on the sighting (not on the
-                // belief) refuses it; the track is then unchanged.
-                let update = match update {
-                    Ok(u) => u,
-                    Err(e) => match Unusable::of(e) {
-                        Some(why) => {
-                            entry.outcome = Some(SightingOutcome::Unusable(why));
-                            return Ok(());
-                        }
-                        None => return Err(e),
-                    },
-                };
-                if let Some(first) = update.first_attempt() {
-                    entry.nll = 0.5 * first.s.determinant().ln() + 0.5 * first.nis.min(NIS_CAP);
-                }
-                entry.inflations = u32::from(update.inflated());
-                match update {
-                    Update::Applied {
-                        correction,
-                        first,
-                        weight,
-                    } => SightingOutcome::Applied {
-                        nis: correction.nis,
-                        recovered: first.is_some(),
-                        weight,
-                    },
-                    Update::Gated { correction, .. } => SightingOutcome::Gated {
-                        nis: correction.nis,
-                    },
-                    Update::NoMeasurement => SightingOutcome::NoMeasurement,
+                match outcome? {
+                    Some(o) => o,
+                    // Refused: the track is unchanged.
+                    None => return Ok(()),
                 }
             }
         }),
     };
     Ok(())
+}
+
+/// Corrects `track` with one sighting `z` of `M` components (range and
+/// bearing, or range alone) by `model`, Student-t weighted as `cfg` says,
+/// and records its innovation log-likelihood term (its NIS capped at
+/// `nis_cap`; `determinant` of the innovation covariance) in `entry`. `Ok(None)`: the correction failed on the
+/// sighting, which is refused (`entry`'s outcome set, the track unchanged).
+fn correct<const M: usize>(
+    cfg: &Config,
+    rules: &Rules<f64>,
+    track: &mut State,
+    entry: &mut Entry,
+    model: &impl MeasurementModel<f64, STATE, M>,
+    z: &SVector<f64, M>,
+    nis_cap: f64,
+    determinant: fn(&SMatrix<f64, M, M>) -> f64,
+) -> Result<Option<SightingOutcome>, locus_core::Error> {
+    let update = match cfg.robust_dof.map(StudentT::new) {
+        Some(Ok(t)) => track.correct_robust(rules, &t, model, z),
+        _ => track.correct(rules, model, z),
+    };
+    // A correction that fails on the sighting (not on the belief) refuses
+    // it; the track is then unchanged.
+    let update = match update {
+        Ok(u) => u,
+        Err(e) => match Unusable::of(e) {
+            Some(why) => {
+                entry.outcome = Some(SightingOutcome::Unusable(why));
+                return Ok(None);
+            }
+            None => return Err(e),
+        },
+    };
+    if let Some(first) = update.first_attempt() {
+        entry.nll = 0.5 * determinant(&first.s).ln() + 0.5 * first.nis.min(nis_cap);
+    }
+    entry.inflations = u32::from(update.inflated());
+    Ok(Some(match update {
+        Update::Applied {
+            correction,
+            first,
+            weight,
+        } => SightingOutcome::Applied {
+            nis: correction.nis,
+            recovered: first.is_some(),
+            weight,
+        },
+        Update::Gated { correction, .. } => SightingOutcome::Gated {
+            nis: correction.nis,
+        },
+        Update::NoMeasurement => SightingOutcome::NoMeasurement,
+    }))
 }
 
 /// The pose part of a belief of the replay's state.
@@ -532,8 +589,27 @@ fn initial_pose(
                 .map(|p| (p, StartedFrom::Truth))
         }),
     };
+    // A truth of positions only gives the heading by its direction of
+    // motion, if it can.
+    let given = match given {
+        Some((p, StartedFrom::Truth)) if p.theta.is_nan() => {
+            initial::heading_from_truth(log, cfg, t0).map(|h| {
+                (
+                    TruthPose {
+                        theta: h.heading,
+                        ..p
+                    },
+                    StartedFrom::TruthPosition(h),
+                )
+            })
+        }
+        other => other,
+    };
     if let Some((p, from)) = given {
-        let [sx, sy, st] = cfg.initial_std;
+        let [sx, sy, mut st] = cfg.initial_std;
+        if let StartedFrom::TruthPosition(h) = from {
+            st = h.std;
+        }
         return Ok((
             Vector3::new(p.x, p.y, wrap_angle(p.theta)),
             SMatrix::<f64, 3, 3>::from_diagonal(&Vector3::new(sx * sx, sy * sy, st * st)),

@@ -184,7 +184,7 @@ impl Log {
                 arrival: s.time,
                 landmark: s.subject,
                 range: s.range,
-                bearing: s.bearing,
+                bearing: Some(s.bearing),
             });
         }
         let name = dataset.dir().file_name().map_or_else(

@@ -156,7 +156,8 @@ struct Kept {
     time: f64,
     landmark: u32,
     range: f64,
-    bearing: f64,
+    /// `None` for a range-only sighting: it gives a range residual only.
+    bearing: Option<f64>,
     state: SVector<f64, STATE>,
     covariance: locus_core::nalgebra::Matrix3<f64>,
 }
@@ -262,15 +263,20 @@ pub fn measurement_round(log: &Log, cfg: &Config) -> Result<(Round, Config), Err
             .into_owned();
         let s = h * k.covariance * h.transpose();
         hph[0] += s[(0, 0)];
-        hph[1] += s[(1, 1)];
+        if k.bearing.is_some() {
+            hph[1] += s[(1, 1)];
+        }
         ranges.push((k.landmark, k.time, k.range - z[0]));
-        bearings.push((k.landmark, k.time, wrap_angle(k.bearing - z[1])));
+        if let Some(b) = k.bearing {
+            bearings.push((k.landmark, k.time, wrap_angle(b - z[1])));
+        }
     }
     let n = ranges.len().max(1) as f64;
     let range_spread =
         robust_spread(ranges.iter().map(|r| r.2).collect()).hypot((hph[0] / n).sqrt());
+    let n_bearing = bearings.len().max(1) as f64;
     let bearing_spread =
-        robust_spread(bearings.iter().map(|r| r.2).collect()).hypot((hph[1] / n).sqrt());
+        robust_spread(bearings.iter().map(|r| r.2).collect()).hypot((hph[1] / n_bearing).sqrt());
     let range_tau = batch_tau(&ranges, range_spread);
     let bearing_tau = batch_tau(&bearings, bearing_spread);
     let mut next = *cfg;

@@ -81,6 +81,10 @@ pub enum StartedFrom {
     Log,
     /// The ground truth at the first odometry time.
     Truth,
+    /// The position of a ground truth without heading at the first
+    /// odometry time, the heading from its direction of motion
+    /// ([`crate::initial::heading_from_truth`]).
+    TruthPosition(crate::initial::TruthHeading),
     /// The first sightings ([`crate::initial`]).
     Sightings(crate::initial::Fix),
 }

@@ -14,7 +14,8 @@ pub enum SightingOutcome {
     /// Corrected the belief (NIS of the applied correction; `recovered`:
     /// applied only after the covariance was inflated).
     Applied {
-        /// NIS of the correction (2 dof), against the nominal noise.
+        /// NIS of the correction (2 dof, 1 for a range-only sighting),
+        /// against the nominal noise.
         nis: f64,
         /// Whether the covariance was inflated before it was applied.
         recovered: bool,
@@ -23,7 +24,7 @@ pub enum SightingOutcome {
     },
     /// Rejected by the gate (NIS against the belief it was tried on).
     Gated {
-        /// NIS (2 dof).
+        /// NIS (2 dof, 1 for a range-only sighting).
         nis: f64,
     },
     /// The landmark is not in the map.
@@ -127,7 +128,7 @@ impl Step {
     /// The CSV header of [`Step::csv_row`] (units in the names).
     #[must_use]
     pub fn csv_header() -> &'static str {
-        "index,time_s,elapsed_s,event,landmark,range_m,bearing_rad,nis,applied,\
+        "index,time_s,elapsed_s,event,landmark,range_m,bearing_rad,nis,nis_dof,applied,\
          x_m,y_m,theta_rad,var_x_m2,cov_xy_m2,cov_xtheta_mrad,var_y_m2,cov_ytheta_mrad,\
          var_theta_rad2,odo_x_m,odo_y_m,odo_theta_rad,true_x_m,true_y_m,true_theta_rad"
     }
@@ -155,14 +156,16 @@ impl Step {
         out.push(',');
         push_f64(out, self.elapsed);
         match self.kind {
-            EventKind::Odometry { .. } => out.push_str(",odometry,,,,,"),
+            EventKind::Odometry { .. } => out.push_str(",odometry,,,,,,"),
             EventKind::Sighting {
                 sighting, outcome, ..
             } => {
                 let _ = write!(out, ",sighting,{},", sighting.landmark);
                 push_f64(out, sighting.range);
                 out.push(',');
-                push_f64(out, sighting.bearing);
+                if let Some(b) = sighting.bearing {
+                    push_f64(out, b);
+                }
                 out.push(',');
                 let (nis, applied) = match outcome {
                     SightingOutcome::Applied { nis, recovered, .. } => {
@@ -175,6 +178,9 @@ impl Step {
                 };
                 if let Some(nis) = nis {
                     push_f64(out, nis);
+                    let _ = write!(out, ",{}", sighting.dof());
+                } else {
+                    out.push(',');
                 }
                 out.push(',');
                 out.push_str(applied);
@@ -205,7 +211,10 @@ impl Step {
             Some(t) => {
                 for v in [t.x, t.y, t.theta] {
                     out.push(',');
-                    push_f64(out, v);
+                    // A truth with no heading leaves its field empty.
+                    if !v.is_nan() {
+                        push_f64(out, v);
+                    }
                 }
             }
             None => out.push_str(",,,"),
@@ -265,9 +274,11 @@ impl Step {
         let d = &self.dead_reckoning;
         let (measured, correction) = match self.kind {
             EventKind::Odometry { .. } => (false, None),
-            EventKind::Sighting { outcome, .. } => match outcome {
-                SightingOutcome::Applied { nis, .. } => (true, Some((nis, 2, true))),
-                SightingOutcome::Gated { nis } => (true, Some((nis, 2, false))),
+            EventKind::Sighting {
+                outcome, sighting, ..
+            } => match outcome {
+                SightingOutcome::Applied { nis, .. } => (true, Some((nis, sighting.dof(), true))),
+                SightingOutcome::Gated { nis } => (true, Some((nis, sighting.dof(), false))),
                 SightingOutcome::NotInMap
                 | SightingOutcome::NoMeasurement
                 | SightingOutcome::Unusable(_) => (true, None),

@@ -1,6 +1,7 @@
 //! `Step::csv_row` / `Step::write_csv_row` give, byte for byte, the row the
 //! `format!`-based writer gave (kept here as the reference), for random
-//! steps of every kind and outcome with any finite numbers.
+//! steps of every kind and outcome with any finite numbers, range-only
+//! sightings and truths without heading.
 
 use locus_core::Belief;
 use locus_core::nalgebra::{Matrix3, Vector3};
@@ -16,26 +17,29 @@ fn reference_row(step: &Step) -> String {
             String::new(),
             String::new(),
             String::new(),
-            String::new(),
+            ",".to_string(),
             String::new(),
         ),
         EventKind::Sighting {
             sighting, outcome, ..
         } => {
+            // NIS and its dof (2, or 1 for a range-only sighting).
+            let dof = if sighting.bearing.is_some() { 2 } else { 1 };
             let (nis, applied) = match outcome {
-                SightingOutcome::Applied { nis, recovered, .. } => {
-                    (nis.to_string(), if recovered { "recovered" } else { "1" })
-                }
-                SightingOutcome::Gated { nis } => (nis.to_string(), "0"),
-                SightingOutcome::NotInMap => (String::new(), "not-in-map"),
-                SightingOutcome::NoMeasurement => (String::new(), "no-measurement"),
-                SightingOutcome::Unusable(_) => (String::new(), "unusable"),
+                SightingOutcome::Applied { nis, recovered, .. } => (
+                    format!("{nis},{dof}"),
+                    if recovered { "recovered" } else { "1" },
+                ),
+                SightingOutcome::Gated { nis } => (format!("{nis},{dof}"), "0"),
+                SightingOutcome::NotInMap => (",".to_string(), "not-in-map"),
+                SightingOutcome::NoMeasurement => (",".to_string(), "no-measurement"),
+                SightingOutcome::Unusable(_) => (",".to_string(), "unusable"),
             };
             (
                 "sighting",
                 sighting.landmark.to_string(),
                 sighting.range.to_string(),
-                sighting.bearing.to_string(),
+                sighting.bearing.map_or_else(String::new, |b| b.to_string()),
                 nis,
                 applied.to_string(),
             )
@@ -46,7 +50,15 @@ fn reference_row(step: &Step) -> String {
     let d = &step.dead_reckoning;
     let truth = step.truth.map_or_else(
         || ",,".to_string(),
-        |t| format!("{},{},{}", t.x, t.y, t.theta),
+        // A truth with no heading (theta NaN) leaves its field empty.
+        |t| {
+            let theta = if t.theta.is_nan() {
+                String::new()
+            } else {
+                t.theta.to_string()
+            };
+            format!("{},{},{theta}", t.x, t.y)
+        },
     );
     format!(
         "{},{},{},{event},{lm},{r},{b},{nis},{applied},{},{},{},{},{},{},{},{},{},{},{},{},{truth}",
@@ -95,15 +107,19 @@ fn kind() -> impl Strategy<Value = EventKind> {
             max: 1000.0
         })),
     ];
-    let sighting = (number(), any::<u32>(), number(), number()).prop_map(
-        |(time, landmark, range, bearing)| Sighting {
+    let sighting = (
+        number(),
+        any::<u32>(),
+        number(),
+        proptest::option::of(number()),
+    )
+        .prop_map(|(time, landmark, range, bearing)| Sighting {
             time,
             arrival: time,
             landmark,
             range,
             bearing,
-        },
-    );
+        });
     prop_oneof![
         (number(), number()).prop_map(|(v, omega)| EventKind::Odometry { v, omega }),
         (sighting, outcome).prop_map(|(sighting, outcome)| EventKind::Sighting {
@@ -116,8 +132,9 @@ fn kind() -> impl Strategy<Value = EventKind> {
 
 fn step() -> impl Strategy<Value = Step> {
     let numbers = proptest::collection::vec(number(), 17);
+    let heading = prop_oneof![3 => number(), 1 => Just(f64::NAN)];
     let truth = proptest::option::of(
-        (number(), number(), number(), number()).prop_map(|(time, x, y, theta)| TruthPose {
+        (number(), number(), number(), heading).prop_map(|(time, x, y, theta)| TruthPose {
             time,
             x,
             y,
@@ -166,7 +183,7 @@ fn rows_have_the_header_s_columns() {
                 arrival: 1.0,
                 landmark: 7,
                 range: 2.0,
-                bearing: -0.5,
+                bearing: Some(-0.5),
             },
             outcome: SightingOutcome::NotInMap,
             line: Some(12),

@@ -256,7 +256,7 @@ fn corrupted(log: &Log, seed: u64) -> (Log, usize) {
         if rng.random_range(0.0..1.0) < 0.5 {
             s.range = rng.random_range(0.0..=10.0);
             // (-pi, pi]: the negation of a draw from [-pi, pi).
-            s.bearing = -rng.random_range(-PI..PI);
+            s.bearing = Some(-rng.random_range(-PI..PI));
         } else {
             let others: Vec<u32> = ids.iter().copied().filter(|&i| i != s.landmark).collect();
             s.landmark = others[rng.random_range(0..others.len())];
@@ -350,9 +350,10 @@ fn gating_recovers_from_an_over_confident_start() {
 fn seen_from(log: &Log, ahead: f64, yaw: f64) -> Log {
     let mut out = log.clone();
     for s in &mut out.sightings {
-        let (px, py) = (s.range * s.bearing.cos() - ahead, s.range * s.bearing.sin());
+        let b = s.bearing.expect("MRCLAM's sightings have a bearing");
+        let (px, py) = (s.range * b.cos() - ahead, s.range * b.sin());
         s.range = px.hypot(py);
-        s.bearing = locus_core::wrap_angle(py.atan2(px) - yaw);
+        s.bearing = Some(locus_core::wrap_angle(py.atan2(px) - yaw));
     }
     out.sensor = locus_logs::SensorMount {
         x: ahead,

@@ -79,8 +79,9 @@ fn simulated() -> Log {
         };
         let (dx, dy) = (l.x - p.x, l.y - p.y);
         s.range = dx.hypot(dy) + SIGMA_RANGE * normal(&mut rng);
-        s.bearing =
-            locus_core::wrap_angle(dy.atan2(dx) - p.theta + SIGMA_BEARING * normal(&mut rng));
+        s.bearing = Some(locus_core::wrap_angle(
+            dy.atan2(dx) - p.theta + SIGMA_BEARING * normal(&mut rng),
+        ));
         true
     });
     log

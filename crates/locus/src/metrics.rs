@@ -67,6 +67,10 @@ struct SummaryKeys {
     ekf_position_rmse: f64,
     #[serde(rename = "ekf_heading_rmse_rad")]
     ekf_heading_rmse: f64,
+    #[serde(rename = "ekf_heading_offset_rad")]
+    ekf_heading_offset: f64,
+    #[serde(rename = "ekf_heading_rmse_about_offset_rad")]
+    ekf_heading_rmse_about_offset: f64,
     #[serde(rename = "ekf_max_position_error_m")]
     ekf_max_position_error: f64,
     #[serde(rename = "odometry_position_rmse_m")]
@@ -178,6 +182,8 @@ mod tests {
             laps_completed: 0,
             ekf_position_rmse: 0.0117,
             ekf_heading_rmse: 0.02,
+            ekf_heading_offset: 0.01,
+            ekf_heading_rmse_about_offset: f64::NAN,
             ekf_max_position_error: 0.05,
             odometry_position_rmse: f64::NAN,
             odometry_heading_rmse: f64::NAN,

@@ -75,7 +75,8 @@ impl ReplayMetrics {
 }
 
 /// `metrics.json`'s `start`: where the initial pose came from (`log`,
-/// `truth` or `sightings`), and for `sightings` the fix.
+/// `truth`, `truth_position` (a truth with no heading: its heading from
+/// the direction of motion) or `sightings`), and for `sightings` the fix.
 #[derive(Serialize)]
 struct StartMetrics {
     from: &'static str,
@@ -105,6 +106,14 @@ impl StartMetrics {
         match from {
             StartedFrom::Log => none("log"),
             StartedFrom::Truth => none("truth"),
+            StartedFrom::TruthPosition(h) => Self {
+                // The heading's assumed std; the position's is the
+                // configured initial one (not a figure of the start).
+                std: Some([f64::NAN, f64::NAN, h.std]),
+                pose: Some([f64::NAN, f64::NAN, h.heading]),
+                span_s: Some(h.span),
+                ..none("truth_position")
+            },
             StartedFrom::Sightings(f) => Self {
                 from: "sightings",
                 pose: Some([f.pose[0], f.pose[1], f.pose[2]]),

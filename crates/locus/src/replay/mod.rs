@@ -62,6 +62,24 @@ enum Source {
         #[command(flatten)]
         common: Common,
     },
+    /// A log in libRSF's text format (e.g.
+    /// `../shared/data/indoor_uwb/Indoor_UWB_Input.txt`): UWB ranges to
+    /// beacons (range-only sightings), differential-drive odometry. The
+    /// ranges' declared variance is not used as the noise.
+    Librsf {
+        /// The input file (`range2`, `odom2diff` lines).
+        input: PathBuf,
+        /// The ground truth (`point2` lines, positions only). Default: the
+        /// input's name with `_Input` replaced by `_GT`, if that file exists.
+        #[arg(long)]
+        truth: Option<PathBuf>,
+        /// Also write the log in Locus's CSV format to this file
+        /// (docs/log-format.md).
+        #[arg(long)]
+        export: Option<PathBuf>,
+        #[command(flatten)]
+        common: Common,
+    },
 }
 
 /// Options shared by both sources.
@@ -184,6 +202,26 @@ pub fn run(args: &Args) -> Result<()> {
             (log, common)
         }
         Source::Csv { file, common } => (Log::locus_csv(file)?, common),
+        Source::Librsf {
+            input,
+            truth,
+            export,
+            common,
+        } => {
+            let truth = truth
+                .clone()
+                .or_else(|| locus_logs::librsf::sibling_truth(input));
+            let read = locus_logs::librsf::read(input, truth.as_deref())?;
+            let name = input
+                .file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+            let log = Log::from_locus_lines(&name, read.log, &read.lines);
+            if let Some(path) = export {
+                fs::write(path, locus_logs::locus_csv::write(&log.to_locus()))
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
+            (log, common)
+        }
     };
     let (cfg, estimated) = calibrate(&log, common)?;
     let slug: String = log
@@ -306,14 +344,16 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
                 line,
             } = step.kind
             {
+                let bearing = sighting
+                    .bearing
+                    .map_or_else(String::new, |b| format!(", bearing {} rad", number(b)));
                 refused.push(format!(
-                    "{}: sighting of landmark {} at {} s (range {} m, bearing {} rad) refused: \
+                    "{}: sighting of landmark {} at {} s (range {} m{bearing}) refused: \
                      the filter cannot use it: {why}",
                     place(&log.name, line),
                     sighting.landmark,
                     number(sighting.time),
                     number(sighting.range),
-                    number(sighting.bearing)
                 ));
             }
             if step.index % 4096 == 0 {
@@ -401,6 +441,12 @@ fn started_from(from: &StartedFrom) -> String {
         StartedFrom::Truth => {
             "initial pose: the ground truth at the first odometry time\n".to_string()
         }
+        StartedFrom::TruthPosition(h) => format!(
+            "initial pose: the ground truth's position at the first odometry time (it has no \
+             heading); heading {:.3} +- {:.3} rad (1 sigma, assumed) from its direction of motion \
+             over its first {:.2} m ({:.1} s) against the odometry's\n",
+            h.heading, h.std, h.travelled, h.span
+        ),
         StartedFrom::Sightings(f) => {
             let sd = |k: usize| f.covariance[(k, k)].sqrt();
             format!(
@@ -514,8 +560,10 @@ fn honesty_table(r: &Report) -> Table {
         "estimate",
         "position RMSE [m]",
         "heading RMSE [rad]",
+        "heading RMSE about its offset [rad]",
+        "heading offset [rad]",
         "inside 3 sigma x / y / theta [%]",
-        "mean NEES [-] (3 if honest)",
+        "mean NEES [-] (its dof if honest)",
     ]);
     let mut rows = vec![("filter", r.summary)];
     if let Some(s) = r.smoothed {
@@ -540,8 +588,10 @@ fn honesty_table(r: &Report) -> Table {
             name.to_string(),
             figure(rmse, 3),
             figure(heading, 3),
+            figure(s.ekf_heading_rmse_about_offset, 3),
+            figure(s.ekf_heading_offset, 3),
             shares,
-            figure(nees, 2),
+            format!("{} ({} dof)", figure(nees, 2), s.nees_dof),
         ]);
     }
     t
