@@ -6,7 +6,7 @@
 //! | kind | columns after the kind | units |
 //! |---|---|---|
 //! | `range2` | t, range, variance, beacon x, beacon y, beacon id, SNR | s, m (>= 0), m^2 (>= 0), m, m, -, - |
-//! | `odom2diff` | t, v right, v left, v y, wheelbase, 3 variances | s, m/s, m/s, m/s (0), m (> 0), (m/s)^2 |
+//! | `odom2diff` | t, v left, v right, v y, half wheel distance, 3 variances | s, m/s, m/s, m/s (0), m (> 0), (m/s)^2 |
 //! | `point2` (ground truth) | t, x, y, 4 covariance entries | s, m, m, m^2 |
 //!
 //! What becomes what:
@@ -14,9 +14,17 @@
 //!   give (every line of one id must give the same position), in the order
 //!   of first appearance; each `range2` line a range-only sighting
 //!   (`bearing` `None`) by a sensor at the robot's centre, in file order;
-//! * each `odom2diff` line an odometry record `v = (r + l) / 2`,
-//!   `omega = (r - l) / wheelbase` (times must not decrease); a sideways
-//!   speed other than 0 is refused (a differential drive has none);
+//! * each `odom2diff` line an odometry record `v = (l + r) / 2`,
+//!   `omega = (r - l) / (2 b)` (times must not decrease); a sideways
+//!   speed other than 0 is refused (a differential drive has none). The
+//!   columns are read as libRSF's own odometry factor
+//!   (`OdometryFactor2DDifferential`) reads them, not as the dataset's
+//!   readme names them: the first speed is the left wheel's (`v - b
+//!   omega`), the second the right's, and the "wheel base" `b` is the
+//!   distance from the centre to a wheel. On indoor_uwb this is what the
+//!   ground truth says: the heading of its direction of motion follows
+//!   `(c4 - c3) / (2 b)` integrated to 0.13 rad RMS about a constant, and
+//!   the readme's `(c3 - c4) / b` turns the other way twice as fast;
 //! * the `point2` lines of the ground-truth file a track of positions only
 //!   ([`Groundtruth::positions`]).
 //!
@@ -99,8 +107,8 @@ pub fn parse_input(text: &str, path: &Path) -> Result<Librsf> {
             }
             "odom2diff" => {
                 let time = f.f64("time")?;
-                let right = f.f64("v right")?;
                 let left = f.f64("v left")?;
+                let right = f.f64("v right")?;
                 let sideways = f.f64("v y")?;
                 if sideways != 0.0 {
                     return Err(f.field_error(
@@ -111,8 +119,8 @@ pub fn parse_input(text: &str, path: &Path) -> Result<Librsf> {
                         },
                     ));
                 }
-                let wheelbase = f.positive("wheelbase")?;
-                for field in ["var v right", "var v left", "var v y"] {
+                let half = f.positive("half wheel distance")?;
+                for field in ["var v left", "var v right", "var v y"] {
                     f.non_negative(field)?;
                 }
                 odometry_order.check(&f, time)?;
@@ -120,7 +128,7 @@ pub fn parse_input(text: &str, path: &Path) -> Result<Librsf> {
                 out.log.odometry.push(Odometry {
                     time,
                     v: 0.5 * (right + left),
-                    omega: (right - left) / wheelbase,
+                    omega: (right - left) / (2.0 * half),
                 });
             }
             other => {
@@ -243,7 +251,7 @@ mod tests {
         assert_eq!(r.range_variances, [0.01, 0.02, 0.01]);
         let o = r.log.odometry[0];
         assert!(
-            (o.v - 0.2).abs() < 1e-15 && (o.omega - 2.5).abs() < 1e-12,
+            (o.v - 0.2).abs() < 1e-15 && (o.omega + 1.25).abs() < 1e-12,
             "{o:?}"
         );
         assert_eq!(r.log.noise, crate::NoiseRecords::default());
@@ -277,7 +285,7 @@ mod tests {
         );
         assert_eq!(
             message("odom2diff 0.1 0.3 0.1 0 0 0 0 0\n"),
-            "in.txt:1: field \"wheelbase\" (column 6): 0 is out of range: > 0"
+            "in.txt:1: field \"half wheel distance\" (column 6): 0 is out of range: > 0"
         );
         assert!(
             message("odom2diff 1 0 0 0 0.08 0 0 0\nodom2diff 0.5 0 0 0 0.08 0 0 0\n")

@@ -61,6 +61,9 @@ pub enum Source {
     Estimated,
     /// [`Config::default`].
     Default,
+    /// [`Config::default`]: the estimate was asked for, but the log cannot
+    /// tell the value (a bearing noise on a log with no bearings).
+    Untold,
 }
 
 impl core::fmt::Display for Source {
@@ -70,6 +73,7 @@ impl core::fmt::Display for Source {
             Source::LogRecord => "log record",
             Source::Estimated => "estimated from the log",
             Source::Default => "default",
+            Source::Untold => "default: the log cannot tell it",
         })
     }
 }
@@ -206,8 +210,18 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
                 calibration: cfg.calibration,
                 ..e.config
             };
+            let last = e.rounds.last();
             for (i, source) in sources.iter_mut().take(4).enumerate() {
-                if *source == Source::Default {
+                let untold = match i {
+                    2 => last.is_none_or(|r| r.ranges == 0),
+                    3 => last.is_none_or(|r| r.bearings == 0),
+                    _ => false,
+                };
+                if *source == Source::Default && untold {
+                    *source = Source::Untold;
+                    *slot(&mut cfg, NoiseRecords::NAMES[i]) =
+                        get(&defaults, NoiseRecords::NAMES[i]);
+                } else if *source == Source::Default {
                     *source = Source::Estimated;
                     errors[i] = match i {
                         0 => e.drift_se(0),

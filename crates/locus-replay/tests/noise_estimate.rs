@@ -144,7 +144,7 @@ fn a_bearing_offset_the_motion_reveals_is_estimated() {
     const OFFSET: f64 = 0.04;
     let mut log = simulated();
     for s in &mut log.sightings {
-        s.bearing = locus_core::wrap_angle(s.bearing + OFFSET);
+        s.bearing = s.bearing.map(|b| locus_core::wrap_angle(b + OFFSET));
     }
     let overrides = Overrides {
         estimation: Estimation::Noise,
@@ -205,9 +205,9 @@ fn a_bearing_offset_a_robot_standing_still_cannot_tell_is_held() {
             arrival: t,
             landmark: id,
             range: dx.hypot(dy) + SIGMA_RANGE * normal(&mut rng),
-            bearing: locus_core::wrap_angle(
+            bearing: Some(locus_core::wrap_angle(
                 dy.atan2(dx) - pose.theta + 0.04 + SIGMA_BEARING * normal(&mut rng),
-            ),
+            )),
         })
         .collect();
     log.sighting_lines.clear();
