@@ -13,6 +13,7 @@
 
 pub mod closed_loop;
 mod error;
+pub mod family;
 pub mod firmware_data;
 pub mod guide;
 pub mod hover;

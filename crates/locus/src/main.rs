@@ -6,6 +6,7 @@
 mod args;
 mod demo;
 mod doa;
+mod family;
 mod font;
 mod guide;
 mod host;
@@ -85,6 +86,14 @@ enum Command {
     /// by maximising the innovation likelihood (argmin's Nelder-Mead);
     /// prints the values and every robot's errors before and after.
     Tune(tune::Args),
+    /// The simulated family of robots (locus_sim::family) as a benchmark
+    /// of the replay: each member's log replayed as `locus replay csv FILE`
+    /// does with no flags, beside an honest reference given the true noise,
+    /// delay and calibration. Prints position and heading RMSE, 3-sigma
+    /// shares, mean NEES and each noise level used against its truth;
+    /// writes family.csv and family.md (and the logs with --out). Exit code
+    /// 0 whatever the figures.
+    Family(family::Args),
     /// The teaching UI in the browser (paper 001's interface): an HTTP and
     /// WebSocket server on 127.0.0.1:8080 (--addr to change) running the
     /// square closed loop per browser tab; the page shows the arena, the
@@ -108,6 +117,7 @@ fn main() -> ExitCode {
         Command::Host(args) => host::run(&args),
         Command::Replay(args) => replay::run(&args),
         Command::Tune(args) => tune::run(&args),
+        Command::Family(args) => family::run(&args),
         Command::Serve(args) => serve::run(&args),
     };
     match result {

@@ -180,6 +180,21 @@ impl Common {
     }
 }
 
+/// The replay's settings other than the noise and the odometry delay for
+/// `locus replay csv FILE` with no flags (the flags' defaults, parsed as
+/// the command parses them), for benchmarks that must replay as the
+/// command does (`locus family`).
+pub(crate) fn default_config() -> Config {
+    #[derive(clap::Parser)]
+    struct NoFlags {
+        #[command(flatten)]
+        common: Common,
+    }
+    <NoFlags as clap::Parser>::parse_from(["replay"])
+        .common
+        .config()
+}
+
 /// Runs `locus replay`.
 ///
 /// # Errors
