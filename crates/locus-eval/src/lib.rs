@@ -171,6 +171,14 @@ pub struct Summary {
     /// the heading errors minus the offset, wrapped, rad; NaN if the truth
     /// has no heading.
     pub ekf_heading_rmse_about_offset: f64,
+    /// Share of steps whose heading error minus
+    /// [`Summary::ekf_heading_offset`] lies within 3 standard deviations of
+    /// the estimate's own heading variance; NaN without a heading truth.
+    pub within_3_sigma_heading_about_offset: f64,
+    /// Mean NEES with the heading errors taken about
+    /// [`Summary::ekf_heading_offset`] (`(e - c u)^T P^-1 (e - c u)`, `u`
+    /// the heading axis); NaN without a heading truth or with mixed dof.
+    pub mean_nees_about_offset: f64,
     /// EKF largest position error (m).
     pub ekf_max_position_error: f64,
     /// Odometry-only position RMSE (m); NaN if the scenario has none.
@@ -232,6 +240,12 @@ pub struct Tally {
     /// The EKF's wrapped heading errors (rad) of the steps whose truth has
     /// a heading.
     heading_errors: Vec<f64>,
+    /// Their estimates' heading variances (rad^2): the share inside 3
+    /// sigma about the offset needs the offset first.
+    heading_variances: Vec<f32>,
+    /// Over the 3-dof samples: sums of `(P^-1 e)_theta` and
+    /// `(P^-1)_theta,theta`, for the NEES about the heading offset.
+    offset_terms: (f64, f64),
     max_pos: f64,
     odo_n: usize,
     odo_sq_pos: f64,
@@ -265,6 +279,8 @@ impl Tally {
             sq_pos: 0.0,
             sq_heading: 0.0,
             heading_errors: Vec::new(),
+            heading_variances: Vec::new(),
+            offset_terms: (0.0, 0.0),
             max_pos: 0.0,
             odo_n: 0,
             odo_sq_pos: 0.0,
@@ -311,6 +327,20 @@ impl Tally {
         if !s.heading_error.is_nan() {
             self.sq_heading += s.heading_error * s.heading_error;
             self.heading_errors.push(s.heading_error);
+            #[allow(clippy::cast_possible_truncation)]
+            self.heading_variances.push(s.covariance[2][2] as f32);
+            let p = Matrix3::from_fn(|i, j| s.covariance[i][j]);
+            if let Some(inverse) = p.try_inverse() {
+                let e = Vector3::new(
+                    s.truth[0] - s.estimate[0],
+                    s.truth[1] - s.estimate[1],
+                    s.heading_error,
+                );
+                self.offset_terms.0 += (inverse * e)[2];
+                self.offset_terms.1 += inverse[(2, 2)];
+            } else {
+                self.offset_terms.0 = f64::NAN;
+            }
         }
         self.max_pos = self.max_pos.max(e2.sqrt());
         if let Some((pos, heading_err)) = s.odometry {
@@ -367,7 +397,26 @@ impl Tally {
         let odo_heading = (self.odo_sq_heading / nonzero(self.odo_heading_n)).sqrt();
         let heading_n = nonzero(self.heading_errors.len());
         let (offset, about_offset) = heading_offset(&self.heading_errors);
+        let inside_about_offset = self
+            .heading_errors
+            .iter()
+            .zip(&self.heading_variances)
+            .filter(|(e, v)| {
+                let d = locus_core::wrap_angle(*e - offset);
+                d * d <= 9.0 * f64::from(**v)
+            })
+            .count() as f64
+            / heading_n;
         let nees_n = if self.mixed_dof { f64::NAN } else { n };
+        // Only when every sample had a heading (3 dof). The heading errors
+        // enter unwrapped: exact unless they straddle +-pi.
+        let nees_about_offset = if self.heading_errors.len() == self.steps {
+            (self.nees_sum - 2.0 * offset * self.offset_terms.0
+                + offset * offset * self.offset_terms.1)
+                / nees_n
+        } else {
+            f64::NAN
+        };
         let wall_clock = self.started.elapsed().as_secs_f64();
         Summary {
             steps: self.steps,
@@ -377,6 +426,8 @@ impl Tally {
             ekf_heading_rmse: (self.sq_heading / heading_n).sqrt(),
             ekf_heading_offset: offset,
             ekf_heading_rmse_about_offset: about_offset,
+            within_3_sigma_heading_about_offset: inside_about_offset,
+            mean_nees_about_offset: nees_about_offset,
             ekf_max_position_error: if self.steps > 0 {
                 self.max_pos
             } else {
@@ -480,6 +531,10 @@ mod tests {
                 "{s:?}"
             );
             assert!((s.ekf_heading_rmse - offset.abs()).abs() < 0.02, "{s:?}");
+            // About the offset, the estimate's own errors are honest.
+            assert_eq!(s.within_3_sigma[2], 0.0, "{s:?}");
+            assert_eq!(s.within_3_sigma_heading_about_offset, 1.0, "{s:?}");
+            assert!(s.mean_nees_about_offset < 0.5 * s.mean_nees, "{s:?}");
         }
     }
 

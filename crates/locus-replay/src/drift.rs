@@ -28,6 +28,7 @@
 //! noisy (a few hundred fixes); `Config::default`'s values are its median
 //! over robots 1-3 of MRCLAM dataset 6 (docs/replay.md).
 
+use locus_core::nalgebra::Vector3;
 use locus_core::wrap_angle;
 
 use crate::dead_reckoning::DeadReckoning;
@@ -122,8 +123,11 @@ pub fn process_noise(log: &Log, cfg: &Config) -> Result<Drift, Error> {
                 continue;
             };
             let end = DeadReckoning::new(log, &fixing, a.pose, *ta).advance(target);
-            let (s, c) = a.pose[2].sin_cos();
-            along.push((b.pose[0] - end[0]) * c + (b.pose[1] - end[1]) * s);
+            // Distance travelled as the chord between the two poses: a
+            // heading error at the first fix rotates the dead-reckoned
+            // path but does not lengthen it.
+            let chord = |p: &Vector3<f64>| (p[0] - a.pose[0]).hypot(p[1] - a.pose[1]);
+            along.push(chord(&b.pose) - chord(&end));
             heading.push(wrap_angle(b.pose[2] - end[2]));
         }
         if along.len() >= MIN_PAIRS {
@@ -147,68 +151,59 @@ pub fn process_noise(log: &Log, cfg: &Config) -> Result<Drift, Error> {
     })
 }
 
-/// Slope of `value` against the interval by weighted least squares, and
-/// its standard error (NaN with fewer than two intervals).
+/// The rate of growth of `value` with the interval, and its standard
+/// error, by weighted least squares (NaN with fewer than three
+/// intervals).
+///
+/// The variance of a drift over `T` seconds is `a + q T + c T^2`: the two
+/// fixes' errors (`a`), white velocity noise (`q`), and a calibration error
+/// left in the dead reckoning (a scale factor or bias a few per cent off
+/// moves it by an amount proportional to `T`, so its variance grows as
+/// `T^2`). `q` is the linear coefficient.
 ///
 /// An interval's robust variance `v` has a variance of about `2 v^2 /
 /// (0.37 n)`: 1.4826 MAD has 37 % of the efficiency of the standard
 /// deviation, and pairs of an interval of `T` seconds overlap, so it counts
-/// `n = pairs * STEP / T` independent pairs. The long intervals have few
-/// pairs and large variances; weighting each by the inverse of that
-/// variance (with `v` from the fitted line, iterated from an unweighted
-/// fit, so a small sample variance does not weigh itself up) lets the
-/// short intervals, where a filter's gaps between sightings lie, set the
-/// slope.
+/// `n = pairs * STEP / T` independent pairs. Each interval is weighted by
+/// the inverse of that variance (with `v` from the fitted curve, iterated
+/// from an unweighted fit, so a small sample variance does not weigh
+/// itself up).
 #[allow(clippy::cast_precision_loss)]
 fn slope(intervals: &[Interval], value: impl Fn(&Interval) -> f64) -> (f64, f64) {
-    if intervals.len() < 2 {
+    use locus_core::nalgebra::{Matrix3, Vector3 as V3};
+    if intervals.len() < 3 {
         return (f64::NAN, f64::NAN);
     }
     let independent = |i: &Interval| (i.pairs as f64 * STEP / i.seconds).max(1.0);
     let mut weights: Vec<f64> = intervals.iter().map(|_| 1.0).collect();
-    let mut fit = (f64::NAN, f64::NAN, f64::NAN);
+    let mut fit = (f64::NAN, f64::NAN);
+    let largest = intervals.iter().map(&value).fold(0.0, f64::max);
     for _ in 0..3 {
-        let total: f64 = weights.iter().sum();
-        let mx = intervals
-            .iter()
-            .zip(&weights)
-            .map(|(i, w)| w * i.seconds)
-            .sum::<f64>()
-            / total;
-        let my = intervals
-            .iter()
-            .zip(&weights)
-            .map(|(i, w)| w * value(i))
-            .sum::<f64>()
-            / total;
-        let den: f64 = intervals
-            .iter()
-            .zip(&weights)
-            .map(|(i, w)| w * (i.seconds - mx).powi(2))
-            .sum();
-        let num: f64 = intervals
-            .iter()
-            .zip(&weights)
-            .map(|(i, w)| w * (i.seconds - mx) * (value(i) - my))
-            .sum();
-        let b = num / den;
-        let a = my - b * mx;
-        // The slope's variance, each interval's variance from the line.
-        let var: f64 = intervals
-            .iter()
-            .zip(&weights)
-            .map(|(i, w)| {
-                let c = w * (i.seconds - mx) / den;
-                let v = (a + b * i.seconds).max(value(i).abs() * 0.1);
-                c * c * 2.0 * v * v / (0.37 * independent(i))
-            })
-            .sum();
-        fit = (b, var.sqrt(), a);
-        let floor = intervals.iter().map(&value).fold(0.0, f64::max) * 0.01;
+        let (mut m, mut r) = (Matrix3::<f64>::zeros(), V3::<f64>::zeros());
+        for (i, w) in intervals.iter().zip(&weights) {
+            let x = V3::new(1.0, i.seconds, i.seconds * i.seconds);
+            m += *w * x * x.transpose();
+            r += *w * value(i) * x;
+        }
+        let Some(inverse) = m.try_inverse() else {
+            return (f64::NAN, f64::NAN);
+        };
+        let c = inverse * r;
+        let curve = |t: f64| (c[0] + c[1] * t + c[2] * t * t).max(largest * 0.01);
+        // The coefficients' covariance, each interval's variance from the
+        // curve: (X^T W X)^-1 X^T W Var W X (X^T W X)^-1.
+        let mut middle = Matrix3::<f64>::zeros();
+        for (i, w) in intervals.iter().zip(&weights) {
+            let x = V3::new(1.0, i.seconds, i.seconds * i.seconds);
+            let v = curve(i.seconds);
+            middle += w * w * 2.0 * v * v / (0.37 * independent(i)) * x * x.transpose();
+        }
+        let covariance = inverse * middle * inverse;
+        fit = (c[1], covariance[(1, 1)].max(0.0).sqrt());
         for (w, i) in weights.iter_mut().zip(intervals) {
-            let v = (a + b * i.seconds).max(floor).max(f64::MIN_POSITIVE);
+            let v = curve(i.seconds).max(f64::MIN_POSITIVE);
             *w = independent(i) / (v * v);
         }
     }
-    (fit.0, fit.1)
+    fit
 }

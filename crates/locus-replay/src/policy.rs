@@ -224,8 +224,8 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
                 } else if *source == Source::Default {
                     *source = Source::Estimated;
                     errors[i] = match i {
-                        0 => e.drift_se(0),
-                        1 => e.drift_se(1),
+                        0 => e.q_se(0),
+                        1 => e.q_se(1),
                         2 => e
                             .rounds
                             .last()

@@ -71,6 +71,9 @@ struct SummaryKeys {
     ekf_heading_offset: f64,
     #[serde(rename = "ekf_heading_rmse_about_offset_rad")]
     ekf_heading_rmse_about_offset: f64,
+    #[serde(rename = "within_3_sigma_heading_about_offset_share")]
+    within_3_sigma_heading_about_offset: f64,
+    mean_nees_about_offset: f64,
     #[serde(rename = "ekf_max_position_error_m")]
     ekf_max_position_error: f64,
     #[serde(rename = "odometry_position_rmse_m")]
@@ -184,6 +187,8 @@ mod tests {
             ekf_heading_rmse: 0.02,
             ekf_heading_offset: 0.01,
             ekf_heading_rmse_about_offset: f64::NAN,
+            within_3_sigma_heading_about_offset: f64::NAN,
+            mean_nees_about_offset: f64::NAN,
             ekf_max_position_error: 0.05,
             odometry_position_rmse: f64::NAN,
             odometry_heading_rmse: f64::NAN,
