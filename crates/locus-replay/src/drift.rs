@@ -68,7 +68,8 @@ pub struct Drift {
     pub q_v: f64,
     /// Power spectral density of the turn-rate noise, rad^2/s.
     pub q_omega: f64,
-    /// Standard error of `q_v`, m^2/s (see [`slope`]).
+    /// Standard error of `q_v`, m^2/s (from the fit's weighted residual
+    /// model: the module documentation).
     pub q_v_se: f64,
     /// Standard error of `q_omega`, rad^2/s.
     pub q_omega_se: f64,

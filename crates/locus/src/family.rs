@@ -356,6 +356,16 @@ fn shares(s: &Summary) -> String {
         .join("/")
 }
 
+/// `as_is`, followed by `about` for a member whose truth has a heading
+/// offset: the figure about that offset.
+fn about_offset(o: &Outcome, as_is: String, about: String) -> String {
+    if o.truth.truth_heading_offset == 0.0 {
+        as_is
+    } else {
+        format!("{as_is} (about the offset: {about})")
+    }
+}
+
 fn ratio(a: f64, b: f64) -> String {
     if a.is_finite() && b.is_finite() && b != 0.0 {
         format!("{:.2}x", a / b)
@@ -408,9 +418,25 @@ fn cells(o: &Outcome) -> Vec<String> {
                     fixed(sa.ekf_heading_rmse, 3),
                     fixed(sr.ekf_heading_rmse, 3)
                 ),
-                shares(sa),
-                shares(sr),
-                format!("{} / {}", fixed(sa.mean_nees, 2), fixed(sr.mean_nees, 2)),
+                about_offset(
+                    o,
+                    shares(sa),
+                    fixed(100.0 * sa.within_3_sigma_heading_about_offset, 0),
+                ),
+                about_offset(
+                    o,
+                    shares(sr),
+                    fixed(100.0 * sr.within_3_sigma_heading_about_offset, 0),
+                ),
+                about_offset(
+                    o,
+                    format!("{} / {}", fixed(sa.mean_nees, 2), fixed(sr.mean_nees, 2)),
+                    format!(
+                        "{} / {}",
+                        fixed(sa.mean_nees_about_offset, 2),
+                        fixed(sr.mean_nees_about_offset, 2)
+                    ),
+                ),
             ];
             for (k, (used, truth)) in a.used.iter().zip(t).enumerate() {
                 row.push(if k == 4 {

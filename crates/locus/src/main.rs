@@ -77,14 +77,17 @@ enum Command {
     /// duplicate, late, corrupt and malformed packets and the robot's clock.
     Host(host::Args),
     /// Replay a recorded log through the EKF: `replay mrclam DIR --robot N`
-    /// (UTIAS MRCLAM) or `replay csv FILE` (Locus's CSV log format,
+    /// (UTIAS MRCLAM), `replay librsf FILE` (libRSF text, e.g. Indoor UWB)
+    /// or `replay csv FILE` (Locus's CSV log format,
     /// docs/log-format.md; `.xz` read directly). Late sightings are applied
     /// at their own time. Prints the summary against ground truth beside
     /// odometry alone, writes `log.csv`, `metrics.json` and pictures.
     Replay(replay::Args),
-    /// Tune the replay's Q, R and odometry scale factors on MRCLAM robots
-    /// by maximising the innovation likelihood (argmin's Nelder-Mead);
-    /// prints the values and every robot's errors before and after.
+    /// Settings for a fleet: the noise and odometry delay estimated on some
+    /// logs (an MRCLAM dataset's robots, or Locus CSV logs), combined by
+    /// their medians, and every log's errors with the built-in and the
+    /// tuned values; by default each estimate is what `locus replay`
+    /// finds from that log with no flags.
     Tune(tune::Args),
     /// The simulated family of robots (locus_sim::family) as a benchmark
     /// of the replay: each member's log replayed as `locus replay csv FILE`

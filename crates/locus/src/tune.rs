@@ -1,16 +1,20 @@
-//! `locus tune DIR` (an MRCLAM dataset): estimates the replay's noise (Q as the power
-//! spectral densities `q_v`, `q_omega`; R as the range and bearing standard
-//! deviations) and the odometry delay from the tuning robots' logs alone,
-//! then reports every robot with the default and the estimated values
-//! against ground truth.
+//! `locus tune LOGS...`: settings for a fleet. The replay estimates its
+//! noise from each log by itself (`locus_replay::policy`); `locus tune`
+//! estimates on some logs (robots), combines the estimates by their
+//! median, and reports every log replayed with the built-in values
+//! (`--delay-only`) and with the tuned ones against its ground truth, the
+//! tuning logs beside the held-out ones. The logs are a UTIAS MRCLAM
+//! dataset directory (robots chosen with `--tune-on` and `--held-out`) or
+//! Locus CSV logs (every one given tuned on; `--held-out-log` adds logs
+//! only reported).
 //!
-//! * `--objective em` (the default): `locus_replay::noise::estimate` on each
-//!   tuning robot (expectation-maximisation over the smoother for R,
-//!   innovation likelihood for Q and the delay; no ground truth), combined
-//!   by the median of each value over the robots.
+//! * `--objective estimate` (the default): what `locus replay` estimates
+//!   from each log with no flags (noise, odometry delay), medians.
+//! * `--objective drift`: the process noise from the drift of dead
+//!   reckoning between pose fixes, and the odometry delay, medians.
 //! * `--objective nll`: argmin's Nelder-Mead on the innovations' negative
 //!   log-likelihood (`locus_replay::Report::innovation_nll`, summed over
-//!   the tuning robots) over the noise and the initial scale factors.
+//!   the tuning logs) over the noise and the initial scale factors.
 //! * `--objective truth`: the same search on the summed position RMSE
 //!   against the ground truth (tuning *on* the truth, for comparison).
 
@@ -31,23 +35,29 @@ use crate::table::with_header;
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     /// An MRCLAM dataset directory (e.g.
-    /// `../shared/data/mrclam/MRCLAM_Dataset6`).
-    dir: PathBuf,
-    /// Robots whose logs the parameters are tuned on (comma-separated).
+    /// `../shared/data/mrclam/MRCLAM_Dataset6`), or one or more logs in
+    /// Locus's CSV format (docs/log-format.md), all tuned on.
+    #[arg(required = true)]
+    logs: Vec<PathBuf>,
+    /// Locus CSV logs reported with the tuned values but not tuned on.
+    #[arg(long)]
+    held_out_log: Vec<PathBuf>,
+    /// MRCLAM robots whose logs the settings are tuned on
+    /// (comma-separated).
     #[arg(long, value_delimiter = ',', default_values_t = [1u32, 2, 3])]
     tune_on: Vec<u32>,
-    /// Robots reported with the tuned values but not tuned on.
+    /// MRCLAM robots reported with the tuned values but not tuned on.
     #[arg(long, value_delimiter = ',', default_values_t = [4u32, 5])]
     held_out: Vec<u32>,
-    /// How to estimate: `drift`, the process noise from how fast dead
-    /// reckoning drifts between pose fixes of the sightings and the
-    /// odometry delay, from the logs alone (how the replay's defaults were
-    /// made); `em`, the noise estimate from the logs alone
-    /// (EM over the smoother and innovation likelihood); `nll`, Nelder-Mead
-    /// on the innovations' negative log-likelihood (no ground truth
-    /// needed); `truth`, Nelder-Mead on the summed position RMSE against
-    /// the ground truth.
-    #[arg(long, value_enum, default_value_t = Objective::Drift)]
+    /// How to estimate: `estimate`, what `locus replay` estimates from
+    /// each log alone with no flags (the noise and the odometry delay);
+    /// `drift`, the process noise from how fast dead reckoning drifts
+    /// between pose fixes of the sightings, and the odometry delay; `nll`,
+    /// Nelder-Mead on the innovations' negative log-likelihood (no ground
+    /// truth needed); `truth`, Nelder-Mead on the summed position RMSE
+    /// against the ground truth (for comparison: it needs the truth). The
+    /// first two take the median of each value over the tuning logs.
+    #[arg(long, value_enum, default_value_t = Objective::Estimate)]
     objective: Objective,
     /// Nelder-Mead iterations at most.
     #[arg(long, default_value_t = 150)]
@@ -57,11 +67,12 @@ pub struct Args {
 /// The score `locus tune` minimises.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 enum Objective {
+    /// `locus_replay::policy::settle` with the noise estimated on each
+    /// log, medians combined.
+    Estimate,
     /// `locus_replay::drift::process_noise` and the odometry delay on each
-    /// robot, medians combined.
+    /// log, medians combined.
     Drift,
-    /// `locus_replay::noise::estimate` on each robot, medians combined.
-    Em,
     /// Innovations' negative log-likelihood.
     Nll,
     /// Position RMSE against the ground truth.
@@ -117,7 +128,7 @@ impl CostFunction for Problem<'_> {
         for log in self.logs {
             let r = replay(log, &cfg, |_| {})?;
             sum += match self.objective {
-                Objective::Nll | Objective::Em | Objective::Drift => r.innovation_nll,
+                Objective::Nll | Objective::Estimate | Objective::Drift => r.innovation_nll,
                 Objective::Truth => r.summary.ekf_position_rmse,
             };
         }
@@ -130,30 +141,31 @@ impl CostFunction for Problem<'_> {
 /// # Errors
 /// Unreadable logs, a failed replay or optimisation, standard output closed.
 pub fn run(args: &Args) -> Result<()> {
-    check_robot_sets(&args.tune_on, &args.held_out)?;
-    let dataset = Dataset::open(&args.dir)?;
-    let read = |robots: &[u32]| -> Result<Vec<Log>> {
-        robots
-            .iter()
-            .map(|&r| Log::mrclam(&dataset, r).with_context(|| format!("robot {r}")))
-            .collect()
-    };
-    let tune_logs = read(&args.tune_on)?;
-    let held_logs = read(&args.held_out)?;
+    let (source, tuned_on, held_out) = read_logs(args)?;
+    let tune_logs: Vec<Log> = tuned_on.iter().map(|(_, l)| l.clone()).collect();
     let start = Config::default();
     let (tuned, how) = match args.objective {
         Objective::Drift => drift_on(&tune_logs, &start)?,
-        Objective::Em => estimate_on(&tune_logs, &start)?,
+        Objective::Estimate => estimate_on(&tune_logs, &start)?,
         Objective::Nll | Objective::Truth => nelder_mead(args, &tune_logs, &start)?,
     };
+    let names = |logs: &[(String, Log)]| {
+        logs.iter()
+            .map(|(n, _)| n.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
     let mut text = format!(
-        "locus tune {}: objective {:?}, tuned on robots {:?} ({how}), held out {:?}\n",
-        dataset.dir().display(),
+        "locus tune {source}: objective {:?}, tuned on {} ({how}), held out {}\n",
         args.objective,
-        args.tune_on,
-        args.held_out
+        names(&tuned_on),
+        if held_out.is_empty() {
+            "none".to_string()
+        } else {
+            names(&held_out)
+        }
     );
-    let mut values = with_header(["parameter [unit]", "default", "tuned"]);
+    let mut values = with_header(["parameter [unit]", "built-in (--delay-only)", "tuned"]);
     let rows = [
         ("q_v, forward-speed noise PSD [m^2/s]", start.q_v, tuned.q_v),
         (
@@ -189,26 +201,19 @@ pub fn run(args: &Args) -> Result<()> {
     text.push_str(&format!("{values}\n"));
 
     let mut table = with_header([
-        "robot",
+        "log",
         "role",
-        "EKF position RMSE default / tuned [m]",
-        "EKF heading RMSE default / tuned [deg]",
-        "odometry position RMSE default / tuned [m]",
-        "gated default / tuned [%]",
-        "worst inside 3 sigma, x/y/theta, default / tuned [%]",
-        "innovation NLL default / tuned",
+        "EKF position RMSE built-in / tuned [m]",
+        "EKF heading RMSE built-in / tuned [deg]",
+        "odometry position RMSE built-in / tuned [m]",
+        "gated built-in / tuned [%]",
+        "worst inside 3 sigma, x/y/theta, built-in / tuned [%]",
+        "innovation NLL built-in / tuned",
     ]);
-    let all = args
-        .tune_on
+    let all = tuned_on
         .iter()
-        .zip(&tune_logs)
-        .map(|(r, l)| (*r, "tuned on", l))
-        .chain(
-            args.held_out
-                .iter()
-                .zip(&held_logs)
-                .map(|(r, l)| (*r, "held out", l)),
-        );
+        .map(|(n, l)| (n, "tuned on", l))
+        .chain(held_out.iter().map(|(n, l)| (n, "held out", l)));
     for (robot, role, log) in all {
         let a: Report = replay(log, &start, |_| {})?;
         let b: Report = replay(log, &tuned, |_| {})?;
@@ -243,7 +248,65 @@ pub fn run(args: &Args) -> Result<()> {
     print_out(&text)
 }
 
-/// The smallest of the 3-sigma shares (NaN if any is).
+/// The logs of `args`: a name for the output, the logs tuned on and the
+/// logs held out (each with its name).
+type Named = Vec<(String, Log)>;
+fn read_logs(args: &Args) -> Result<(String, Named, Named)> {
+    let first = &args.logs[0];
+    if args.logs.len() == 1 && first.is_dir() {
+        check_robot_sets(&args.tune_on, &args.held_out)?;
+        if !args.held_out_log.is_empty() {
+            return Err(anyhow!(
+                "--held-out-log is for Locus CSV logs; an MRCLAM dataset holds out robots \
+                 (--held-out)"
+            ));
+        }
+        let dataset = Dataset::open(first)?;
+        let read = |robots: &[u32]| -> Result<Named> {
+            robots
+                .iter()
+                .map(|&r| {
+                    Ok((
+                        format!("robot {r}"),
+                        Log::mrclam(&dataset, r).with_context(|| format!("robot {r}"))?,
+                    ))
+                })
+                .collect()
+        };
+        return Ok((
+            dataset.dir().display().to_string(),
+            read(&args.tune_on)?,
+            read(&args.held_out)?,
+        ));
+    }
+    let read = |paths: &[PathBuf]| -> Result<Named> {
+        paths
+            .iter()
+            .map(|p| {
+                if p.is_dir() {
+                    return Err(anyhow!(
+                        "{}: a directory among log files (an MRCLAM dataset is tuned on alone)",
+                        p.display()
+                    ));
+                }
+                Ok((p.display().to_string(), Log::locus_csv(p)?))
+            })
+            .collect()
+    };
+    let tuned = read(&args.logs)?;
+    let held = read(&args.held_out_log)?;
+    if let Some((n, _)) = held.iter().find(|(n, _)| tuned.iter().any(|(m, _)| m == n)) {
+        return Err(anyhow!(
+            "{n} is both tuned on and held out: a log tuned on cannot be held out"
+        ));
+    }
+    Ok((
+        format!("{} CSV logs", tuned.len() + held.len()),
+        tuned,
+        held,
+    ))
+}
+
 /// The robot sets must be disjoint and without repeats: a held-out robot
 /// that is also tuned on is not held out, and a robot listed twice would
 /// count twice. Checked before any work.
@@ -323,15 +386,20 @@ fn drift_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
     ))
 }
 
-/// `locus_replay::noise::estimate` on each log from `start`, combined by
-/// the median of each estimated value; and how it was reached.
+/// What `locus replay` estimates from each log with no flags
+/// (`locus_replay::policy::settle`, `Estimation::Noise`), combined by the
+/// median of each value; and how it was reached.
 fn estimate_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
+    use locus_replay::policy::{Estimation, Overrides, settle};
+    let overrides = Overrides {
+        estimation: Estimation::Noise,
+        ..Overrides::default()
+    };
+    let base = crate::replay::default_config();
     let each = each_log(logs, |log| {
-        Ok(
-            locus_replay::noise::estimate(log, start, &Default::default(), false)
-                .with_context(|| format!("estimating the noise of {}", log.name))?
-                .config,
-        )
+        Ok(settle(log, &base, &overrides)
+            .with_context(|| format!("estimating the noise of {}", log.name))?
+            .config)
     })?;
     let pick = |f: fn(&Config) -> f64| median(each.iter().map(f).collect());
     let tuned = Config {
@@ -344,7 +412,8 @@ fn estimate_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
     };
     Ok((
         tuned,
-        "EM over the smoother and innovation likelihood, each robot; medians".to_string(),
+        "the noise and the odometry delay `locus replay` estimates from each log; medians"
+            .to_string(),
     ))
 }
 
