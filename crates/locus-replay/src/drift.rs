@@ -4,16 +4,19 @@
 //! Every [`STEP`] seconds, the sightings of the next [`FIX_WINDOW`] seconds
 //! fix a pose ([`crate::initial::fix_between`]); fixes whose standard
 //! deviations exceed [`MAX_FIX_STD`] are left out. From each fix, dead
-//! reckoning on the logged odometry (the log's delay, the scale factors a
-//! filter replay estimated) runs to the fix [`INTERVALS`] later, and the
-//! difference is split into the along-track error (in the first fix's
-//! heading) and the heading error. A white velocity noise of power spectral
-//! density `q` makes such an error's variance grow as `q T` over an
-//! interval `T`, plus the two fixes' own errors, which do not grow with
-//! `T`. So the slope of the variance (taken robustly, 1.4826 times the
-//! median absolute deviation, squared) against `T`, fitted by least
-//! squares over the intervals, is `q_v` (along-track) and `q_omega`
-//! (heading), and the intercept absorbs the fixes' errors. This is the
+//! reckoning on the logged odometry (the log's delay, the calibration a
+//! filter replay ends with) runs to the fix [`INTERVALS`] later. Two
+//! errors are taken: the distance travelled (the chord from the first fix,
+//! fix against dead reckoning: a heading error at the first fix rotates the
+//! dead-reckoned path but does not lengthen it) and the heading. A white
+//! velocity noise of power spectral density `q` makes such an error's
+//! variance grow as `q T` over an interval `T`, plus the two fixes' own
+//! errors, which do not grow with `T`, plus what a calibration error left
+//! in the dead reckoning adds, which grows as `T^2`. So the variance
+//! (taken robustly, 1.4826 times the median absolute deviation, squared)
+//! is fitted as `a + q T + c T^2` over the intervals, by weighted least
+//! squares with each interval's own sampling variance, and `q` with its
+//! standard error is `q_v` (distance) or `q_omega` (heading). This is the
 //! idea of the Allan-variance identification of inertial sensor noise
 //! (IEEE Std 952-1997, annex C; El-Sheimy, Hou and Niu, "Analysis and
 //! modeling of inertial sensors using Allan variance", IEEE Trans.
@@ -24,9 +27,10 @@
 //! errors over the seconds-long gaps between sightings, which is where a
 //! filter's covariance must grow as fast as its errors; unlike
 //! expectation-maximisation over a smoother, it does not see the
-//! trajectory through the filter's own process noise. Per robot it is
-//! noisy (a few hundred fixes); `Config::default`'s values are its median
-//! over robots 1-3 of MRCLAM dataset 6 (docs/replay.md).
+//! trajectory through the filter's own process noise. Per log it is noisy
+//! (a few hundred fixes, the fixes' own errors often larger than the drift
+//! over a few seconds): its standard error says how much, and
+//! [`crate::noise::estimate`] takes its value only where the log tells it.
 
 use locus_core::nalgebra::Vector3;
 use locus_core::wrap_angle;
@@ -52,7 +56,7 @@ pub const MIN_PAIRS: usize = 10;
 pub struct Interval {
     /// The interval, s.
     pub seconds: f64,
-    /// Robust variance of the along-track error, m^2.
+    /// Robust variance of the error in distance travelled, m^2.
     pub along: f64,
     /// Robust variance of the heading error, rad^2.
     pub heading: f64,
@@ -64,7 +68,8 @@ pub struct Interval {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Drift {
     /// Power spectral density of the forward-speed noise, m^2/s (the
-    /// slope of the along-track variance).
+    /// linear growth of the distance error's variance; may be negative
+    /// where the log cannot tell it).
     pub q_v: f64,
     /// Power spectral density of the turn-rate noise, rad^2/s.
     pub q_omega: f64,
