@@ -105,9 +105,20 @@ enum Command {
     Serve(serve::Args),
 }
 
+/// Stack of each rayon worker, bytes.
+const REPLAY_STACK: usize = 64 << 20;
+
 fn main() -> ExitCode {
     // `locus hw | head -1`: a `println!` on the closed pipe ends quietly.
     output::quiet_broken_pipe();
+    // Replays run on rayon's workers, and a replay estimating its noise
+    // runs replays in parallel in turn (nested, on the same stacks): the
+    // running filter's history is a large value, so the workers get
+    // stacks of 64 MiB (reserved, not committed) rather than 2 MiB.
+    // Failing to set it (a pool already built) only keeps the default.
+    let _ = rayon::ThreadPoolBuilder::new()
+        .stack_size(REPLAY_STACK)
+        .build_global();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo(args) => demo::run(&args),

@@ -88,6 +88,30 @@ fn the_uwb_log_replays_position_only_and_every_range_is_accounted_for() {
     let odometry = m["odometry_position_rmse_m"].as_f64().unwrap();
     assert!(filter.is_finite() && filter > 0.0, "{m}");
     assert!(odometry.is_finite() && odometry > 0.0, "{m}");
+    // Issue 27: with no flags, better than odometry alone, and honest: x
+    // and y inside the filter's own 3 sigma on >= 90 % of the steps.
+    assert!(
+        filter < odometry,
+        "filter {filter} m, odometry alone {odometry} m"
+    );
+    let row = stdout
+        .lines()
+        .find(|l| {
+            l.split('┆')
+                .next()
+                .map(|c| c.trim_start_matches('│').trim())
+                == Some("filter")
+        })
+        .unwrap_or_else(|| panic!("no filter row in\n{stdout}"));
+    let shares: Vec<f64> = row
+        .split('┆')
+        .nth(5)
+        .expect("the shares cell")
+        .split(['/', '('])
+        .filter_map(|v| v.trim().parse().ok())
+        .collect();
+    assert_eq!(shares.len(), 2, "{row}");
+    assert!(shares.iter().all(|s| *s >= 90.0), "{row}");
     assert_eq!(m["start"]["from"], "truth_position", "{m}");
     assert!(stdout.contains("odometry alone"), "{stdout}");
     assert!(stdout.contains("mean NEES (2 dof, ideal 2)"), "{stdout}");
