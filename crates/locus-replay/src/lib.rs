@@ -777,3 +777,15 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
     engine.smooth_and_flush()?;
     Ok(engine.report)
 }
+
+#[cfg(test)]
+mod nis_caps {
+    /// The caps are the 99.9 % points of chi-square with 2 and 1 dof.
+    #[test]
+    fn the_caps_are_the_chi_square_points() {
+        for (cap, dof) in [(super::NIS_CAP, 2), (super::NIS_CAP_RANGE, 1)] {
+            let q = locus_core::chi2::quantile(0.999, dof).unwrap();
+            assert!((cap - q).abs() < 1e-9 * q, "{cap} against {q} ({dof} dof)");
+        }
+    }
+}

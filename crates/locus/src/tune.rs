@@ -252,9 +252,10 @@ pub fn run(args: &Args) -> Result<()> {
 /// logs held out (each with its name).
 type Named = Vec<(String, Log)>;
 fn read_logs(args: &Args) -> Result<(String, Named, Named)> {
+    // The robot sets are checked before any log is read.
+    check_robot_sets(&args.tune_on, &args.held_out)?;
     let first = &args.logs[0];
     if args.logs.len() == 1 && first.is_dir() {
-        check_robot_sets(&args.tune_on, &args.held_out)?;
         if !args.held_out_log.is_empty() {
             return Err(anyhow!(
                 "--held-out-log is for Locus CSV logs; an MRCLAM dataset holds out robots \
