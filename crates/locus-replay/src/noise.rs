@@ -35,9 +35,16 @@
 //!   twice (coordinate descent), with a standard error from the
 //!   likelihood-ratio interval ([`Estimate::q_se`]).
 //!
+//! * **Covariance matching after the gaps**: the first sighting after a
+//!   gap of [`GAP`] s or more is predicted through it, so its NIS says
+//!   whether the covariance grew as fast as the error. Errors that persist
+//!   for seconds (commanded velocities) grow faster than the white noise
+//!   the likelihood fits; the process noise is raised until the median
+//!   post-gap NIS is at most chi-square's median.
+//!
 //! The order: measurement rounds until the noise settles ([`CONVERGED`],
 //! at most [`MAX_ROUNDS`]), the delay, the process noise, measurement
-//! rounds again. Each round replays the whole log (the smoother's rounds
+//! rounds again, the covariance matching after the gaps. Each round replays the whole log (the smoother's rounds
 //! twice as long as the filter's).
 //!
 //! What this recovers is measured in docs/replay.md and by `locus family`:
@@ -45,7 +52,7 @@
 //! within a few per cent and the process noise where the log tells it; a
 //! correlated error or heavy tails widen the measurement noise on purpose;
 //! on MRCLAM, whose commanded velocities err the same way for seconds, the
-//! filter it gives is more over-confident than the hand-set values were.
+//! gaps' covariance matching raises the process noise 2-8 times.
 
 use alloc::collections::BTreeMap;
 
@@ -144,6 +151,9 @@ pub struct Estimate {
     pub q_factors: [Vec<(f64, f64)>; 2],
     /// The drift estimate of the process noise.
     pub drift: crate::drift::Drift,
+    /// The factor the process noise was raised by after the gaps (1 when
+    /// the post-gap sightings found it honest, or were too few).
+    pub gap_factor: f64,
 }
 
 impl Estimate {
@@ -158,11 +168,12 @@ impl Estimate {
     pub fn q_se(&self, k: usize) -> f64 {
         let tried = &self.q_factors[k];
         if tried.is_empty() {
-            return if k == 0 {
-                self.drift.q_v_se
-            } else {
-                self.drift.q_omega_se
-            };
+            return self.gap_factor
+                * if k == 0 {
+                    self.drift.q_v_se
+                } else {
+                    self.drift.q_omega_se
+                };
         }
         let q = if k == 0 {
             self.config.q_v
@@ -400,6 +411,52 @@ fn grid_minimum(
     Ok((best, tried))
 }
 
+/// Seconds without a sighting that make the next one a post-gap sighting.
+pub const GAP: f64 = 5.0;
+/// Post-gap sightings the covariance matching needs.
+pub const MIN_POST_GAP: usize = 10;
+/// Median of chi-square with 2 dof, `2 ln 2`.
+const CHI2_2_MEDIAN: f64 = 1.386_294_361_119_890_6;
+/// Factors on the process noise tried, in order, until the post-gap NIS is
+/// honest.
+pub const GAP_FACTORS: [f64; 9] = [1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0];
+
+/// The median NIS of the first range-bearing sighting after each gap of
+/// [`GAP`] s or more, or `None` with fewer than [`MIN_POST_GAP`] of them.
+/// (Covariance matching on the innovations, Mehra, "Approaches to adaptive
+/// filtering", IEEE Trans. Automatic Control 17(5), 1972, restricted to
+/// the sightings whose prediction crossed a gap; the median, so that
+/// outliers do not set it.)
+fn post_gap_nis(log: &Log, cfg: &Config) -> Result<Option<f64>, Error> {
+    let run = Config {
+        smooth: false,
+        evaluate: false,
+        ..*cfg
+    };
+    let mut last = f64::NEG_INFINITY;
+    let mut nis = Vec::new();
+    replay(log, &run, |s: &Step| {
+        if let EventKind::Sighting {
+            sighting, outcome, ..
+        } = s.kind
+        {
+            if sighting.bearing.is_some() && s.time - last >= GAP {
+                match outcome {
+                    crate::SightingOutcome::Applied { nis: n, .. }
+                    | crate::SightingOutcome::Gated { nis: n } => nis.push(n),
+                    _ => {}
+                }
+            }
+            last = s.time;
+        }
+    })?;
+    if nis.len() < MIN_POST_GAP {
+        return Ok(None);
+    }
+    nis.sort_by(f64::total_cmp);
+    Ok(Some(nis[nis.len() / 2]))
+}
+
 /// Most measurement rounds in one run to convergence.
 pub const MAX_ROUNDS: usize = 8;
 /// Relative change of both measurement noises below which the rounds stop.
@@ -447,7 +504,10 @@ fn converge(
 /// 3. the process noise from the drift of dead reckoning between pose
 ///    fixes ([`crate::drift::process_noise`]); where the log has too few
 ///    fixes for it, the factor of [`Q_FACTORS`] of smallest innovation NLL;
-/// 4. measurement rounds to convergence again.
+/// 4. measurement rounds to convergence again;
+/// 5. the process noise raised where the sightings after gaps of [`GAP`] s
+///    or more say the covariance grew too slowly through them
+///    ([`Estimate::gap_factor`]).
 ///
 /// # Errors
 /// The replay's errors.
@@ -500,8 +560,34 @@ pub fn estimate(
         q_factors[k] = tried;
     }
     cfg = pin(cfg, given);
-    let cfg = converge(log, cfg, given, &mut rounds)?;
+    let mut cfg = converge(log, cfg, given, &mut rounds)?;
+    // Covariance matching after the gaps: the likelihood takes the
+    // odometry's errors as white, and errors that persist for seconds
+    // (commanded velocities a robot follows late or short) grow faster
+    // over a long gap than white noise of the same likelihood. The first
+    // sighting after a gap is predicted through it, so its NIS says
+    // whether the covariance grew as fast as the error: the process noise
+    // is raised (never lowered) by the first factor of [`GAP_FACTORS`]
+    // whose post-gap NIS has at most chi-square's median.
+    let mut gap_factor = 1.0;
+    if given.q_v.is_none() && given.q_omega.is_none() {
+        for factor in GAP_FACTORS {
+            gap_factor = factor;
+            let trial = Config {
+                q_v: cfg.q_v * factor,
+                q_omega: cfg.q_omega * factor,
+                ..cfg
+            };
+            match post_gap_nis(log, &trial)? {
+                Some(m) if m > CHI2_2_MEDIAN => {}
+                _ => break,
+            }
+        }
+        cfg.q_v *= gap_factor;
+        cfg.q_omega *= gap_factor;
+    }
     Ok(Estimate {
+        gap_factor,
         config: Config {
             smooth: start.smooth,
             evaluate: start.evaluate,

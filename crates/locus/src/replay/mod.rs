@@ -292,6 +292,19 @@ fn calibrate(log: &Log, common: &Common) -> Result<(Config, String)> {
             s.source.to_string(),
         ]);
     }
+    if let Some(e) = &settled.estimate {
+        t.add_row(vec![
+            "process noise raised after the gaps [x]".to_string(),
+            format!("{}", e.gap_factor),
+            "-".to_string(),
+            format!(
+                "the median NIS of the sightings after gaps of {} s or more against \
+                 chi-square's (1: honest already, or fewer than {} such sightings)",
+                locus_replay::noise::GAP,
+                locus_replay::noise::MIN_POST_GAP
+            ),
+        ]);
+    }
     for b in &settled.biases {
         let (m, sd) = b.smoothed;
         t.add_row(vec![
