@@ -664,10 +664,10 @@ fn recovery_keeps_the_held_biases_at_their_prior() {
 
 /// `locus replay` with no flags: the noise, delay and biases from each log
 /// alone (`policy::settle`, `Estimation::Noise`), nothing from the truth
-/// but the start. Every 3-sigma share of the filter and the smoother is
-/// >= 90 % on every robot, the filter's mean NEES <= 5 (measured 1.7-4.5),
-/// and the errors stay near the hand-set values' (measured filter
-/// 0.117-0.217 m, smoother 0.074-0.129 m).
+/// but the start. Every 3-sigma share of the filter and the smoother is at
+/// least 90 % on every robot, the filter's mean NEES at most 5 (measured
+/// 1.7-4.5), and the errors stay near the hand-set values' (measured
+/// filter 0.117-0.217 m, smoother 0.074-0.129 m).
 #[test]
 fn the_no_flags_replay_takes_its_noise_from_each_log_and_stays_honest() {
     use locus_replay::policy::{Estimation, Overrides, settle};
