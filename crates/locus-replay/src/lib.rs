@@ -106,11 +106,13 @@ pub enum Error {
     /// The log has no odometry: nothing to replay.
     #[error("the log has no odometry")]
     NoOdometry,
-    /// The log gives no initial pose, has no ground truth at the first
-    /// odometry time, and its sightings fix none ([`initial`]).
+    /// The log gives no initial pose, has no ground truth to start from at
+    /// the first odometry time (a pose, or positions whose first motion
+    /// gives a heading), and its sightings fix none ([`initial`]).
     #[error(
-        "no initial pose: the log has no start pose, no ground truth at {time} s, and its first \
-         sightings fix none (at least {min} that agree, on two landmarks or more, within {window} s)",
+        "no initial pose: the log has no start pose, no ground truth to start from at {time} s \
+         (a pose, or positions whose first motion gives the heading), and its first sightings \
+         fix none (at least {min} that agree, on two landmarks or more, within {window} s)",
         min = initial::MIN_INLIERS,
         window = initial::WINDOWS[initial::WINDOWS.len() - 1]
     )]
