@@ -92,6 +92,14 @@ pub struct Setting {
     /// Its standard error when estimated (NaN when the estimate gives
     /// none, or the value was not estimated).
     pub se: f64,
+    /// The noise level the log shows, before the replay widens it: a
+    /// measurement noise's spread before its correlation widening
+    /// (`value / sqrt(tau)`, [`crate::noise`]), a process noise before
+    /// the gaps' factor (`value / gap_factor`). Equal to `value` where
+    /// nothing was widened or nothing estimated. `value` is what each
+    /// sighting or step is given when applied as independent; `level` is
+    /// what compares with a sensor's data sheet.
+    pub level: f64,
 }
 
 /// Prior standard deviations of the turn-rate bias (rad/s) and the
@@ -184,6 +192,7 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
     cfg.validate()?;
     let mut estimate = None;
     let mut errors = [f64::NAN; 5];
+    let mut widening = [1.0; 5];
     let mut biases = Vec::new();
     match overrides.estimation {
         Estimation::Nothing => {}
@@ -235,6 +244,12 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
                             .last()
                             .map_or(f64::NAN, crate::noise::Round::bearing_se),
                     };
+                    widening[i] = match (i, last) {
+                        (0 | 1, _) => e.gap_factor,
+                        (2, Some(r)) => r.range_tau.sqrt(),
+                        (3, Some(r)) => r.bearing_tau.sqrt(),
+                        _ => 1.0,
+                    };
                 }
             }
             if overrides.odometry_delay.is_none() {
@@ -277,6 +292,7 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
             value: get(&cfg, name),
             source: sources[i],
             se: errors[i],
+            level: get(&cfg, name) / widening[i],
         })
         .collect();
     settings.push(Setting {
@@ -285,6 +301,7 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
         value: cfg.odometry_delay,
         source: sources[4],
         se: f64::NAN,
+        level: cfg.odometry_delay,
     });
     Ok(Settled {
         config: cfg,

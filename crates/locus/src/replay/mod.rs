@@ -278,7 +278,13 @@ fn calibrate(log: &Log, common: &Common) -> Result<(Config, String)> {
     };
     let settled = settle(log, &common.config(), &overrides)
         .with_context(|| format!("settling the noise of {}", log.name))?;
-    let mut t = with_header(["setting [unit]", "value", "+- (1 sigma)", "from"]);
+    let mut t = with_header([
+        "setting [unit]",
+        "value",
+        "+- (1 sigma)",
+        "level the log shows (x widening)",
+        "from",
+    ]);
     for s in &settled.settings {
         let decimals = if s.name == "odometry_delay" { 2 } else { 5 };
         t.add_row(vec![
@@ -289,6 +295,11 @@ fn calibrate(log: &Log, common: &Common) -> Result<(Config, String)> {
             } else {
                 "-".to_string()
             },
+            if s.level == s.value {
+                "-".to_string()
+            } else {
+                format!("{:.decimals$} (x{:.2})", s.level, s.value / s.level)
+            },
             s.source.to_string(),
         ]);
     }
@@ -296,6 +307,7 @@ fn calibrate(log: &Log, common: &Common) -> Result<(Config, String)> {
         t.add_row(vec![
             "process noise raised after the gaps [x]".to_string(),
             format!("{}", e.gap_factor),
+            "-".to_string(),
             "-".to_string(),
             format!(
                 "the median NIS of the sightings after gaps of {} s or more against \
@@ -314,6 +326,7 @@ fn calibrate(log: &Log, common: &Common) -> Result<(Config, String)> {
             } else {
                 format!("estimated from 0 +- {}", b.prior_std)
             },
+            "-".to_string(),
             "-".to_string(),
             if b.held {
                 format!(
