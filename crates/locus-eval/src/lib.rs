@@ -219,6 +219,34 @@ pub struct Summary {
 }
 
 impl Summary {
+    /// The same summary with every figure that needs the truth NaN ("n/a",
+    /// `null` in JSON), as a tally of no step gives them: for a run whose
+    /// only steps compared with the truth carry nothing to judge (a start
+    /// pose copied from that truth).
+    #[must_use]
+    pub fn without_truth_figures(mut self) -> Self {
+        for v in [
+            &mut self.ekf_position_rmse,
+            &mut self.ekf_heading_rmse,
+            &mut self.ekf_heading_offset,
+            &mut self.ekf_heading_rmse_about_offset,
+            &mut self.within_3_sigma_heading_about_offset,
+            &mut self.mean_nees_about_offset,
+            &mut self.ekf_max_position_error,
+            &mut self.odometry_position_rmse,
+            &mut self.odometry_heading_rmse,
+            &mut self.odometry_max_position_error,
+            &mut self.mean_nees,
+            &mut self.nees_in_interval,
+            &mut self.sim_time,
+            &mut self.real_time_factor,
+        ] {
+            *v = f64::NAN;
+        }
+        self.within_3_sigma = [f64::NAN; 3];
+        self
+    }
+
     /// The same summary with the wall-clock fields zeroed, for comparing
     /// runs.
     #[must_use]

@@ -144,6 +144,21 @@ pub enum Error {
         #[source]
         source: io::Error,
     },
+    /// A line is longer than [`MAX_LINE`](crate::MAX_LINE) bytes: no
+    /// record of a log is, and reading on would hold it all in memory.
+    #[error(
+        "{}:{line}: line longer than {max} bytes (no record of a log is; a damaged or \
+         hostile file?)",
+        path.display()
+    )]
+    LineTooLong {
+        /// The file.
+        path: PathBuf,
+        /// The line (1-based).
+        line: usize,
+        /// The bound, bytes.
+        max: usize,
+    },
     /// The (decompressed) content is not UTF-8 text.
     #[error("{}:{line}: not valid UTF-8 text", path.display())]
     NotUtf8 {

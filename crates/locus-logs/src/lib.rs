@@ -4,6 +4,7 @@
 pub mod decimal;
 pub mod error;
 pub mod librsf;
+pub mod lines;
 pub mod locus_csv;
 pub mod mrclam;
 pub mod noise;
@@ -13,7 +14,14 @@ mod text;
 pub mod truth_cursor;
 mod xz;
 
+/// Longest line a log may hold, bytes (1 MiB): a record is at most a few
+/// hundred bytes (a scan of a thousand beams a few tens of kilobytes); a
+/// longer line is a damaged or hostile file, refused before it fills the
+/// memory.
+pub const MAX_LINE: usize = 1 << 20;
+
 pub use error::{Error, FieldProblem, RecordProblem, Result};
+pub use lines::Lines;
 pub use noise::NoiseRecords;
 pub use sensor::SensorMount;
 pub use sighting::{Landmark, Sighting};

@@ -47,9 +47,9 @@ pub struct Librsf {
     /// The log: beacons as landmarks, range-only sightings, odometry,
     /// ground truth of positions only.
     pub log: LocusLog,
-    /// The line of each measurement of [`LocusLog::measurements`] in the
+    /// The line of each measurement, odometry record and beacon in the
     /// input file.
-    pub lines: Vec<usize>,
+    pub lines: crate::Lines,
     /// The range variance each `range2` line declares (m^2), in the order
     /// of [`LocusLog::measurements`]: information, not used as the noise.
     pub range_variances: Vec<f64>,
@@ -66,7 +66,6 @@ const INPUT_KINDS: &str = "one of range2, odom2diff";
 /// times that go back, a beacon at two positions.
 pub fn parse_input(text: &str, path: &Path) -> Result<Librsf> {
     let mut out = Librsf::default();
-    let mut beacon_lines: Vec<usize> = Vec::new();
     let mut odometry_order = TimeOrder::new();
     for mut f in records(text, path) {
         let kind = f.next_text("kind")?;
@@ -86,13 +85,13 @@ pub fn parse_input(text: &str, path: &Path) -> Result<Librsf> {
                         if l.x != x || l.y != y {
                             return Err(f.record_error(RecordProblem::Disagrees {
                                 what: "this beacon's position differs from the one it has on",
-                                first_line: beacon_lines[i],
+                                first_line: out.lines.landmarks[i],
                             }));
                         }
                     }
                     None => {
                         out.log.landmarks.push(MapLandmark { id, x, y });
-                        beacon_lines.push(line);
+                        out.lines.landmarks.push(line);
                     }
                 }
                 f.end(8)?;
@@ -102,7 +101,7 @@ pub fn parse_input(text: &str, path: &Path) -> Result<Librsf> {
                     range,
                     bearing: None,
                 });
-                out.lines.push(line);
+                out.lines.measurements.push(line);
                 out.range_variances.push(variance);
             }
             "odom2diff" => {
@@ -130,6 +129,7 @@ pub fn parse_input(text: &str, path: &Path) -> Result<Librsf> {
                     v: 0.5 * (right + left),
                     omega: (right - left) / (2.0 * half),
                 });
+                out.lines.odometry.push(line);
             }
             other => {
                 return Err(f.field_error(
@@ -247,7 +247,7 @@ mod tests {
         assert_eq!(r.log.measurements.len(), 3);
         assert_eq!(r.log.measurements[1].range, 1.6);
         assert!(r.log.measurements.iter().all(|m| m.bearing.is_none()));
-        assert_eq!(r.lines, [1, 3, 4]);
+        assert_eq!(r.lines.measurements, [1, 3, 4]);
         assert_eq!(r.range_variances, [0.01, 0.02, 0.01]);
         let o = r.log.odometry[0];
         assert!(

@@ -27,6 +27,7 @@ use std::path::{Path, PathBuf};
 
 use crate::decimal::push_f64;
 use crate::error::{FieldProblem, RecordProblem, Result, excerpt};
+use crate::lines::Lines;
 use crate::mrclam::{Groundtruth, Odometry, TruthPose};
 use crate::noise::NoiseRecords;
 use crate::sensor::SensorMount;
@@ -104,26 +105,26 @@ pub fn parse(text: &str, path: &Path) -> Result<LocusLog> {
     parse_with_lines(text, path).map(|(log, _)| log)
 }
 
-/// As [`parse`], with the line (1-based) of each measurement (`measurement`
-/// or `range` line), in the order
-/// of [`LocusLog::measurements`]: what a reader of the log names when it
-/// refuses one.
+/// As [`parse`], with the line (1-based) of each record ([`Lines`]): what
+/// a reader of the log names when it refuses one.
 ///
 /// # Errors
 /// As [`parse`].
-pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Vec<usize>)> {
+pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Lines)> {
     let mut log = LocusLog::default();
-    let mut measurement_lines: Vec<usize> = Vec::new();
-    let mut landmark_lines: Vec<usize> = Vec::new();
+    let mut lines = Lines::default();
+    let measurement_lines = &mut lines.measurements;
+    let landmark_lines = &mut lines.landmarks;
+    let odometry_lines = &mut lines.odometry;
     let mut odometry_order = TimeOrder::new();
     let mut truth_order = TimeOrder::new();
     let mut truth: Vec<TruthPose> = Vec::new();
     // The first truth line and whether it gives a heading.
     let mut truth_heading: Option<(usize, bool)> = None;
-    let mut start_line: Option<usize> = None;
-    let mut sensor_line: Option<usize> = None;
+    let start_line = &mut lines.start;
+    let sensor_line = &mut lines.sensor;
     // The line of each noise name's record, in the order of NoiseRecords::NAMES.
-    let mut noise_lines: [Option<usize>; 4] = [None; 4];
+    let noise_lines = &mut lines.noise;
     for mut f in csv_records(text, path) {
         let kind = f.next_text("kind")?;
         let line = f.line;
@@ -134,7 +135,7 @@ pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Vec<usize>
                     y: f.f64("y")?,
                     yaw: f.f64("yaw")?,
                 };
-                if let Some(first_line) = sensor_line {
+                if let Some(first_line) = *sensor_line {
                     return Err(f.record_error(RecordProblem::DuplicateRecord {
                         what: "sensor line",
                         first_line,
@@ -142,7 +143,7 @@ pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Vec<usize>
                 }
                 f.end(4)?;
                 log.sensor = Some(mount);
-                sensor_line = Some(line);
+                *sensor_line = Some(line);
             }
             "noise" => {
                 let name = f.next_text("name")?;
@@ -187,7 +188,7 @@ pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Vec<usize>
             }
             "start" => {
                 let pose = pose(&mut f)?;
-                if let Some(first_line) = start_line {
+                if let Some(first_line) = *start_line {
                     return Err(f.record_error(RecordProblem::DuplicateRecord {
                         what: "start line",
                         first_line,
@@ -195,7 +196,7 @@ pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Vec<usize>
                 }
                 f.end(5)?;
                 log.start = Some(pose);
-                start_line = Some(line);
+                *start_line = Some(line);
             }
             "odometry" => {
                 let o = Odometry {
@@ -206,6 +207,7 @@ pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Vec<usize>
                 odometry_order.check(&f, o.time)?;
                 f.end(4)?;
                 log.odometry.push(o);
+                odometry_lines.push(line);
             }
             "measurement" => {
                 let m = LandmarkMeasurement {
@@ -272,7 +274,7 @@ pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Vec<usize>
         Groundtruth::new(truth)
     }
     .unwrap_or_default();
-    Ok((log, measurement_lines))
+    Ok((log, lines))
 }
 
 fn pose(f: &mut crate::text::Fields<'_>) -> Result<TruthPose> {
@@ -298,12 +300,12 @@ pub fn read(path: &Path) -> Result<LocusLog> {
     read_with_lines(path).map(|(log, _, _)| log)
 }
 
-/// As [`read`], with the line of each measurement (as
-/// [`parse_with_lines`]) and the file actually read (`path` or `path.xz`).
+/// As [`read`], with the line of each record (as [`parse_with_lines`])
+/// and the file actually read (`path` or `path.xz`).
 ///
 /// # Errors
 /// As [`read`].
-pub fn read_with_lines(path: &Path) -> Result<(LocusLog, Vec<usize>, PathBuf)> {
+pub fn read_with_lines(path: &Path) -> Result<(LocusLog, Lines, PathBuf)> {
     let file = existing(path)?;
     let (log, lines) = parse_with_lines(&read_text(&file)?, &file)?;
     Ok((log, lines, file))
@@ -534,7 +536,7 @@ mod tests {
                     range,0.13,105,2.955\nmeasurement,0.2,105,2.9,0.5\nrange,0.1,105,0\n\
                     truth,0,1.65,2.22\ntruth,0.13,1.66,2.21\n";
         let (log, lines) = parse_with_lines(text, p()).unwrap();
-        assert_eq!(lines, [5, 6, 7]);
+        assert_eq!(lines.measurements, [5, 6, 7]);
         assert_eq!(
             log.measurements[0],
             LandmarkMeasurement {

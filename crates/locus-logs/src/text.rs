@@ -4,6 +4,7 @@
 
 use core::str::{Split, SplitAsciiWhitespace};
 use std::fs;
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, FieldProblem, RecordProblem, Result, excerpt};
@@ -82,20 +83,36 @@ fn special_kind(_: &fs::FileType) -> &'static str {
 }
 
 /// The text of a file, decompressed if it is an xz stream (by its `.xz`
-/// extension or its magic bytes).
+/// extension or its magic bytes), read in chunks with every line bounded
+/// by [`MAX_LINE`](crate::MAX_LINE): a file holding one huge line is
+/// refused as soon as the line passes the bound, before it fills the
+/// memory.
 pub(crate) fn read_text(path: &Path) -> Result<String> {
-    let bytes = fs::read(path).map_err(|source| Error::Io {
+    let io = |source| Error::Io {
         path: path.to_path_buf(),
         source,
-    })?;
-    let is_xz = path.extension().is_some_and(|e| e == "xz") || bytes.starts_with(&XZ_MAGIC);
+    };
+    let mut file = fs::File::open(path).map_err(io)?;
+    let mut head = [0u8; XZ_MAGIC.len()];
+    let n = read_up_to(&mut file, &mut head).map_err(io)?;
+    let is_xz = path.extension().is_some_and(|e| e == "xz") || head[..n] == XZ_MAGIC;
+    let size = file.metadata().map_or(0, |m| m.len());
+    let head = std::io::Cursor::new(head[..n].to_vec());
     let bytes = if is_xz {
-        xz::decompress(&bytes).map_err(|source| Error::Decompress {
-            path: path.to_path_buf(),
-            source,
+        let input = std::io::BufReader::new(head.chain(file));
+        let mut decoder = xz::decoder(input);
+        bounded(&mut decoder, path, size.saturating_mul(8)).map_err(|e| match e {
+            Bounded::Line(e) => e,
+            Bounded::Io(source) => Error::Decompress {
+                path: path.to_path_buf(),
+                source,
+            },
         })?
     } else {
-        bytes
+        bounded(&mut head.chain(file), path, size).map_err(|e| match e {
+            Bounded::Line(e) => e,
+            Bounded::Io(source) => io(source),
+        })?
     };
     String::from_utf8(bytes).map_err(|e| {
         let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
@@ -104,6 +121,78 @@ pub(crate) fn read_text(path: &Path) -> Result<String> {
             line: 1 + valid.iter().filter(|b| **b == b'\n').count(),
         }
     })
+}
+
+/// Reads into `buf` until it is full or the input ends; the bytes read.
+fn read_up_to(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut n = 0;
+    while n < buf.len() {
+        match r.read(&mut buf[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(n)
+}
+
+/// Why [`bounded`] stopped.
+enum Bounded {
+    /// A line passed [`MAX_LINE`](crate::MAX_LINE).
+    Line(Error),
+    /// The input failed.
+    Io(std::io::Error),
+}
+
+/// All of `r`, in chunks of 1 MiB, checking after each that the line being
+/// read has not passed [`MAX_LINE`](crate::MAX_LINE); `hint` sizes the
+/// first allocation (bytes, capped at 1 GiB).
+fn bounded(r: &mut impl Read, path: &Path, hint: u64) -> core::result::Result<Vec<u8>, Bounded> {
+    const CHUNK: usize = 1 << 20;
+    let cap = usize::try_from(hint.min(1 << 30)).unwrap_or(CHUNK);
+    let mut out: Vec<u8> = Vec::with_capacity(cap.max(CHUNK));
+    // Bytes of the current line so far, and the complete lines before it.
+    let (mut current, mut lines) = (0usize, 0usize);
+    loop {
+        let start = out.len();
+        out.resize(start + CHUNK, 0);
+        let n = match read_up_to(r, &mut out[start..]) {
+            Ok(n) => n,
+            Err(e) => return Err(Bounded::Io(e)),
+        };
+        out.truncate(start + n);
+        let too_long = |line| {
+            Bounded::Line(Error::LineTooLong {
+                path: path.to_path_buf(),
+                line,
+                max: crate::MAX_LINE,
+            })
+        };
+        // The chunk's first piece continues the current line; each newline
+        // ends one; the piece after the last newline starts the next.
+        let mut pieces = out[start..].split(|b| *b == b'\n').peekable();
+        let mut first = true;
+        while let Some(piece) = pieces.next() {
+            let length = if first {
+                current + piece.len()
+            } else {
+                piece.len()
+            };
+            first = false;
+            if length > crate::MAX_LINE {
+                return Err(too_long(lines + 1));
+            }
+            if pieces.peek().is_some() {
+                lines += 1;
+            } else {
+                current = length;
+            }
+        }
+        if n < CHUNK {
+            return Ok(out);
+        }
+    }
 }
 
 /// The data lines of a text: `(line number, fields)`, skipping blank lines
@@ -304,5 +393,56 @@ impl TimeOrder {
         }
         self.previous = time;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::MAX_LINE;
+
+    fn read(name: &str, content: &[u8]) -> Result<String> {
+        let dir = std::env::temp_dir().join(format!("locus-logs-text-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(name);
+        fs::write(&path, content).unwrap();
+        let r = read_text(&path);
+        let _ = fs::remove_file(&path);
+        r
+    }
+
+    fn xz(data: &[u8]) -> Vec<u8> {
+        let mut out = Vec::new();
+        liblzma::read::XzEncoder::new(data, 1)
+            .read_to_end(&mut out)
+            .unwrap();
+        out
+    }
+
+    #[test]
+    fn a_line_of_the_bound_reads_and_one_byte_more_is_refused_with_its_line() {
+        // Lines straddle the 1 MiB chunks: the bound holds across them.
+        let mut ok = b"a\nbb\n".to_vec();
+        ok.extend(core::iter::repeat_n(b'#', MAX_LINE));
+        ok.extend(b"\nc\n");
+        assert_eq!(read("ok.csv", &ok).unwrap().len(), ok.len());
+        assert_eq!(read("ok.csv.xz", &xz(&ok)).unwrap().len(), ok.len());
+        let mut long = b"a\nbb\n".to_vec();
+        long.extend(core::iter::repeat_n(b'#', MAX_LINE + 1));
+        long.extend(b"\nc\n");
+        for (name, content) in [("long.csv", long.clone()), ("long.csv.xz", xz(&long))] {
+            let e = read(name, &content).unwrap_err();
+            assert!(
+                matches!(e, Error::LineTooLong { line: 3, .. }),
+                "{name}: {e}"
+            );
+            assert!(
+                e.to_string().contains(":3: line longer than 1048576 bytes"),
+                "{e}"
+            );
+        }
+        // A last line with no newline is bounded too.
+        let e = read("tail.csv", &vec![b'x'; 3 * MAX_LINE]).unwrap_err();
+        assert!(matches!(e, Error::LineTooLong { line: 1, .. }), "{e}");
     }
 }

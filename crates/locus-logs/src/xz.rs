@@ -4,28 +4,27 @@
 //! (`benches/decode.rs`), and verifies each block's integrity check
 //! (CRC64 in xz's default files).
 
-use std::io::{self, Read as _};
+use std::io;
 
 /// The magic bytes that start an xz stream.
 pub(crate) const XZ_MAGIC: [u8; 6] = [0xFD, b'7', b'z', b'X', b'Z', 0x00];
 
-/// The decompressed content of `xz`, one xz stream or several concatenated
-/// (as `xz -d` accepts).
-///
-/// # Errors
-/// A corrupt, truncated or non-xz input (`io::ErrorKind::InvalidData` or
-/// `UnexpectedEof`, with liblzma's reason).
-pub(crate) fn decompress(xz: &[u8]) -> io::Result<Vec<u8>> {
-    // Text logs compress about 7-30 fold; an allocation this size is only
-    // touched as far as it is filled.
-    let mut out = Vec::with_capacity(xz.len().saturating_mul(32));
-    liblzma::bufread::XzDecoder::new_multi_decoder(xz).read_to_end(&mut out)?;
-    Ok(out)
+/// A decoder of one xz stream or several concatenated, reading `input`.
+pub(crate) fn decoder<R: io::BufRead>(input: R) -> liblzma::bufread::XzDecoder<R> {
+    liblzma::bufread::XzDecoder::new_multi_decoder(input)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::io::Read as _;
+
+    /// The decompressed content of `xz`.
+    fn decompress(xz: &[u8]) -> io::Result<Vec<u8>> {
+        let mut out = Vec::new();
+        decoder(xz).read_to_end(&mut out)?;
+        Ok(out)
+    }
 
     fn compress(data: &[u8]) -> Vec<u8> {
         let mut out = Vec::new();

@@ -311,7 +311,7 @@ proptest! {
             // Plausible: no farther than the top speed over the accepted
             // robot time, plus the arena (corrections stay near the walls).
             let moved = ((b.x[0] - start[0]).powi(2) + (b.x[1] - start[1]).powi(2)).sqrt();
-            prop_assert!(moved <= cfg.limits.max_wheel_speed * accepted_time + 5.0, "moved {moved} m in {accepted_time} s");
+            prop_assert!(moved <= cfg.limits.max_speed * accepted_time + 5.0, "moved {moved} m in {accepted_time} s");
             prop_assert_eq!(host.counters().received(), fed);
         }
     }

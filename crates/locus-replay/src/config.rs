@@ -2,6 +2,8 @@
 
 use locus_models::calibrated_unicycle::CalibratedUnicycle;
 
+use locus_models::plausible::Limits;
+
 use crate::Error;
 
 /// Parameters of a replay.
@@ -58,6 +60,11 @@ pub struct Config {
     pub max_range: f64,
     /// Where the initial pose comes from.
     pub start: Start,
+    /// What an odometry record may say (top speed and turn rate, longest
+    /// gap between records; `locus_models::plausible`): a record beyond
+    /// them is refused (counted, named by its line, the velocities before
+    /// it held). Default [`Limits::GENERIC`].
+    pub limits: Limits,
 }
 
 /// Where a replay's initial pose comes from.
@@ -148,6 +155,7 @@ impl Default for Config {
             horizon: 1.0,
             truth_max_gap: 0.25,
             max_range: 1000.0,
+            limits: Limits::GENERIC,
             start: Start::Log,
         }
     }
@@ -223,7 +231,30 @@ impl Config {
                 "truth_max_gap must be finite and > 0",
             ),
             (positive(self.max_range), "max_range must be finite and > 0"),
+            (
+                self.q_v <= self.limits.max_noise("q_v").unwrap_or(f64::INFINITY),
+                "q_v must be at most max_speed^2 (m^2/s: a speed error of the top speed every second)",
+            ),
+            (
+                self.q_omega <= self.limits.max_noise("q_omega").unwrap_or(f64::INFINITY),
+                "q_omega must be at most max_turn_rate^2 (rad^2/s)",
+            ),
+            (
+                self.sigma_range
+                    <= self
+                        .limits
+                        .max_noise("sigma_range")
+                        .unwrap_or(f64::INFINITY),
+                "sigma_range must be at most max_coordinate (m)",
+            ),
+            (
+                self.sigma_bearing <= core::f64::consts::PI,
+                "sigma_bearing must be at most pi rad",
+            ),
         ];
+        if let Err(what) = self.limits.validate() {
+            return Err(Error::InvalidConfig(what));
+        }
         match checks.iter().find(|(ok, _)| !ok) {
             Some((_, what)) => Err(Error::InvalidConfig(what)),
             None => Ok(()),

@@ -87,7 +87,7 @@ use locus_models::range_bearing::RangeBearing;
 use locus_models::unicycle::{Unicycle, Velocities};
 
 pub use config::{Calibration, Config, Start};
-pub use log::{Landmark, Log, RefusedTime, Sighting, TIME_TOLERANCE, TimeProblem};
+pub use log::{Landmark, Log, RefusedRecord, RefusedTime, Sighting, TIME_TOLERANCE, TimeProblem};
 pub use report::{Report, StartedFrom};
 pub use step::{EventKind, SightingOutcome, Step, Unusable};
 
@@ -148,11 +148,29 @@ pub enum Error {
         /// The event's time, s.
         time: f64,
     },
+    /// The log cannot be read (file, line and field named).
+    #[error(transparent)]
+    Read(#[from] locus_logs::Error),
+    /// A record every sighting or the start depends on is implausible
+    /// (`locus_models::plausible`).
+    #[error("{file}:{}{what}: {why}", line.map_or_else(String::new, |l| format!("{l}: ")))]
+    Implausible {
+        /// The log's name (its file's).
+        file: String,
+        /// The record's line, if known.
+        line: Option<usize>,
+        /// The record (`sensor`, `landmark`, `start`).
+        what: &'static str,
+        /// Why.
+        why: locus_models::plausible::Implausible,
+    },
     /// The filter failed (non-finite input, ...).
-    #[error("filter step at {time} s")]
+    #[error("filter step at {time} s{}", line.map_or_else(String::new, |l| format!(" (line {l})")))]
     Filter {
         /// The event's time, s.
         time: f64,
+        /// The event's line in the log, if known.
+        line: Option<usize>,
         /// The filter's error.
         #[source]
         source: locus_core::Error,
@@ -162,7 +180,8 @@ pub enum Error {
 /// An event of the canonical timeline.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Event {
-    Odometry(Odometry),
+    /// An odometry record and its line in the log file, if known.
+    Odometry(Odometry, Option<usize>),
     /// A sighting and its line in the log file, if known (not part of the
     /// order).
     Sighting(Sighting, Option<usize>),
@@ -171,7 +190,7 @@ enum Event {
 impl Event {
     fn time(&self) -> f64 {
         match self {
-            Event::Odometry(o) => o.time,
+            Event::Odometry(o, _) => o.time,
             Event::Sighting(s, _) => s.time,
         }
     }
@@ -185,9 +204,9 @@ impl Event {
             return by_time;
         }
         match (self, other) {
-            (Event::Odometry(_), Event::Odometry(_)) => Ordering::Equal,
-            (Event::Odometry(_), Event::Sighting(..)) => Ordering::Less,
-            (Event::Sighting(..), Event::Odometry(_)) => Ordering::Greater,
+            (Event::Odometry(..), Event::Odometry(..)) => Ordering::Equal,
+            (Event::Odometry(..), Event::Sighting(..)) => Ordering::Less,
+            (Event::Sighting(..), Event::Odometry(..)) => Ordering::Greater,
             // Range-only sightings (no bearing) before range-bearing ones.
             (Event::Sighting(a, _), Event::Sighting(b, _)) => a
                 .landmark
@@ -274,7 +293,7 @@ fn apply(
     entry.inflations = 0;
     entry.nll = 0.0;
     entry.outcome = match entry.event {
-        Event::Odometry(o) => {
+        Event::Odometry(o, _) => {
             track.extra.v = o.v;
             track.extra.omega = o.omega;
             None
@@ -409,6 +428,8 @@ struct Engine<'a, F: FnMut(&Step)> {
     nodes: Vec<smoother::Node>,
     /// Ground-truth lookups in (mostly) increasing time.
     truth: TruthCursor<'a>,
+    /// Steps compared with the truth after the start time.
+    compared_after_start: usize,
     sink: F,
 }
 
@@ -433,6 +454,9 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             Err(source) => {
                 return Err(Error::Filter {
                     time: event.time(),
+                    line: match event {
+                        Event::Odometry(_, line) | Event::Sighting(_, line) => line,
+                    },
                     source: *source,
                 });
             }
@@ -449,7 +473,7 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
 
     fn emit(&mut self, e: &Entry, after: &State) {
         let kind = match e.event {
-            Event::Odometry(o) => {
+            Event::Odometry(o, _) => {
                 self.report.odometry += 1;
                 EventKind::Odometry {
                     v: o.v,
@@ -504,6 +528,7 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
         self.report.steps += 1;
         if let Some(sample) = step.sample() {
             self.report.compared += 1;
+            self.compared_after_start += usize::from(time > self.t0);
             self.tally.push(&sample);
         }
         if self.cfg.smooth {
@@ -545,7 +570,11 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             }
             (self.sink)(step);
         }
-        self.report.smoothed = Some(honest(tally.summary(0), &self.report));
+        self.report.smoothed = Some(honest(
+            tally.summary(0),
+            &self.report,
+            self.compared_after_start > 0,
+        ));
         self.report.smoothed_calibration = first_calibration;
         self.held = Vec::new();
         self.nodes = Vec::new();
@@ -556,12 +585,14 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
 /// `s` (a tally of the steps compared with the truth; its truth figures
 /// are already NaN when no step was compared) made honest for a replay: the
 /// counts of readings, associated and applied sightings are the replay's
-/// own over every sighting (`r`), which do not need the truth, and with no
-/// step compared the compared time and its real-time factor are NaN.
-fn honest(mut s: locus_eval::Summary, r: &Report) -> locus_eval::Summary {
-    if s.steps == 0 {
-        s.sim_time = f64::NAN;
-        s.real_time_factor = f64::NAN;
+/// own over every sighting (`r`), which do not need the truth; with no
+/// step compared after the start (`judged` false: the only one compared is
+/// the start pose, copied from the truth when the replay started from
+/// it) every truth figure, the compared time and its real-time factor are
+/// NaN, never the 0 error and 100 % of a pose compared with itself.
+fn honest(mut s: locus_eval::Summary, r: &Report, judged: bool) -> locus_eval::Summary {
+    if s.steps == 0 || !judged {
+        s = s.without_truth_figures();
     }
     s.readings = r.sightings;
     s.associated = r.applied + r.gated;
@@ -725,6 +756,7 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
             no_measurement: 0,
             unusable: 0,
             implausible_time: log.refused_times.len(),
+            implausible_odometry: 0,
             robot_sightings: log.robot_sightings,
             unknown_sightings: log.unknown_sightings,
             late: 0,
@@ -738,25 +770,32 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
         held: Vec::with_capacity(if cfg.smooth { events } else { 0 }),
         nodes: Vec::with_capacity(if cfg.smooth { events } else { 0 }),
         truth: log.truth.cursor(),
+        compared_after_start: 0,
         sink,
     };
-    let mut odometry = log.odometry.iter().peekable();
+    let mut odometry = log.odometry.iter().enumerate().peekable();
     let mut sightings = log.sightings.iter().enumerate().peekable();
     loop {
         let take_odometry = match (odometry.peek(), sightings.peek()) {
-            (Some(o), Some((_, s))) => o.time + cfg.odometry_delay <= s.arrival,
+            (Some((_, o)), Some((_, s))) => o.time + cfg.odometry_delay <= s.arrival,
             (Some(_), None) => true,
             (None, Some(_)) => false,
             (None, None) => break,
         };
         if take_odometry {
-            if let Some(o) = odometry.next() {
+            if let Some((i, o)) = odometry.next() {
+                // An implausible record is refused: the velocities before
+                // it are held.
+                if log.odometry_problem(i, &cfg.limits).is_some() {
+                    engine.report.implausible_odometry += 1;
+                    continue;
+                }
                 let o = Odometry {
                     time: o.time + cfg.odometry_delay,
                     ..*o
                 };
                 engine.finalise_before(o.time - cfg.horizon);
-                engine.insert(Event::Odometry(o))?;
+                engine.insert(Event::Odometry(o, log.lines.odometry.get(i).copied()))?;
             }
         } else if let Some((i, s)) = sightings.next() {
             engine.finalise_before(s.arrival - cfg.horizon);
@@ -767,7 +806,7 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
                 continue;
             }
             let late = s.time < engine.filter.time();
-            engine.insert(Event::Sighting(*s, log.sighting_lines.get(i).copied()))?;
+            engine.insert(Event::Sighting(*s, log.lines.measurements.get(i).copied()))?;
             engine.report.late += usize::from(late);
         }
     }
@@ -775,7 +814,11 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
     let last = engine.filter.base().belief;
     engine.report.final_belief = pose_belief(&last);
     engine.report.calibration = calibration_of(&last);
-    engine.report.summary = honest(engine.tally.summary(0), &engine.report);
+    engine.report.summary = honest(
+        engine.tally.summary(0),
+        &engine.report,
+        engine.compared_after_start > 0,
+    );
     engine.smooth_and_flush()?;
     Ok(engine.report)
 }

@@ -8,7 +8,10 @@ use std::path::Path;
 
 use locus_logs::locus_csv::{self, LocusLog};
 use locus_logs::mrclam::{Dataset, Groundtruth, Odometry, TruthPose};
-pub use locus_logs::{Landmark, NoiseRecords, SensorMount, Sighting};
+pub use locus_logs::{Landmark, Lines, NoiseRecords, SensorMount, Sighting};
+use locus_models::plausible::{Implausible, Limits};
+
+use crate::Error;
 
 /// A robot's log, ready to replay.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -40,16 +43,40 @@ pub struct Log {
     /// All zeros (the default) is a sensor at the robot's centre, along its
     /// heading.
     pub sensor: SensorMount,
-    /// The noise levels the log declares (none for MRCLAM).
+    /// The noise levels the log declares (none for MRCLAM), those
+    /// [`Limits::GENERIC`] refuses left out ([`Log::refused_noise`]).
     pub noise: NoiseRecords,
-    /// The line of each sighting in its file, in the order of
-    /// [`Log::sightings`] (a Locus CSV log read from a file); empty if not
-    /// known.
-    pub sighting_lines: Vec<usize>,
+    /// Noise records refused as implausible: left out of [`Log::noise`],
+    /// so the replay estimates those levels (or takes its defaults).
+    pub refused_noise: Vec<RefusedRecord>,
+    /// The line of each record in its file (a log read from a file; empty
+    /// where not known): `measurements` in the order of [`Log::sightings`],
+    /// `odometry` in the order of [`Log::odometry`].
+    pub lines: Lines,
     /// Sightings refused because their time stamp is implausible
     /// ([`TIME_TOLERANCE`]), left out of [`Log::sightings`].
     pub refused_times: Vec<RefusedTime>,
 }
+
+/// A record refused as implausible, with its line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RefusedRecord {
+    /// Its line in the file, if known.
+    pub line: Option<usize>,
+    /// What it is (`noise q_v`, `odometry`).
+    pub what: &'static str,
+    /// Why it is implausible.
+    pub why: Implausible,
+}
+
+/// What `noise` record each noise level comes from, in the order of
+/// [`NoiseRecords::NAMES`].
+const NOISE_WHAT: [&str; 4] = [
+    "noise q_v",
+    "noise q_omega",
+    "noise sigma_range",
+    "noise sigma_bearing",
+];
 
 /// How far a sighting's time may lie beyond the last odometry record, or
 /// ahead of the measurements listed on both sides of it, s: the replay's
@@ -202,7 +229,8 @@ impl Log {
             unknown_sightings: split.unknown.len(),
             sensor: SensorMount::default(),
             noise: NoiseRecords::default(),
-            sighting_lines: Vec::new(),
+            refused_noise: Vec::new(),
+            lines: Lines::default(),
             refused_times,
         })
     }
@@ -215,25 +243,82 @@ impl Log {
     /// line has its sensor at the robot's centre ([`SensorMount::default`]).
     /// A measurement whose time is implausible ([`TimeProblem`]) is
     /// refused: listed in [`Log::refused_times`], left out, and not taken
-    /// into the arrival of the ones after it.
-    #[must_use]
-    pub fn from_locus(name: &str, log: LocusLog) -> Self {
-        Self::from_locus_lines(name, log, &[])
+    /// into the arrival of the ones after it. A noise record
+    /// [`Limits::GENERIC`] finds implausible is refused: listed in
+    /// [`Log::refused_noise`] and left out.
+    ///
+    /// # Errors
+    /// [`Error::Implausible`] for a sensor mount, landmark or start pose
+    /// that [`Limits::GENERIC`] refuses (every sighting, or the start,
+    /// depends on it: nothing sensible can be replayed).
+    pub fn from_locus(name: &str, log: LocusLog) -> Result<Self, Error> {
+        Self::from_locus_lines(name, log, &Lines::default())
     }
 
-    /// As [`Log::from_locus`], with the line of each measurement in the
-    /// file (`lines[i]` of `log.measurements[i]`; empty if not known).
-    #[must_use]
-    pub fn from_locus_lines(name: &str, log: LocusLog, lines: &[usize]) -> Self {
+    /// As [`Log::from_locus`], with the line of each record in the file
+    /// (empty if not known).
+    ///
+    /// # Errors
+    /// As [`Log::from_locus`].
+    pub fn from_locus_lines(name: &str, log: LocusLog, lines: &Lines) -> Result<Self, Error> {
+        let limits = Limits::GENERIC;
+        let implausible = |line: Option<usize>, what: &'static str, why| Error::Implausible {
+            file: name.to_string(),
+            line,
+            what,
+            why,
+        };
+        if let Some(m) = log.sensor {
+            limits
+                .check_mount(m.x, m.y, m.yaw)
+                .map_err(|why| implausible(lines.sensor, "sensor", why))?;
+        }
+        for (i, l) in log.landmarks.iter().enumerate() {
+            limits
+                .check_coordinate(l.x)
+                .and_then(|()| limits.check_coordinate(l.y))
+                .map_err(|why| implausible(lines.landmarks.get(i).copied(), "landmark", why))?;
+        }
+        if let Some(p) = log.start {
+            limits
+                .check_coordinate(p.x)
+                .and_then(|()| limits.check_coordinate(p.y))
+                .map_err(|why| implausible(lines.start, "start", why))?;
+            if p.theta.abs() > core::f64::consts::TAU {
+                return Err(implausible(
+                    lines.start,
+                    "start",
+                    Implausible::MountYaw { value: p.theta },
+                ));
+            }
+        }
+        let mut noise = log.noise;
+        let mut refused_noise = Vec::new();
+        for (k, name) in NoiseRecords::NAMES.into_iter().enumerate() {
+            let Some(slot) = noise.get_mut(name) else {
+                continue;
+            };
+            let limit = limits.max_noise(name).unwrap_or(f64::INFINITY);
+            if let Some(value) = *slot
+                && value > limit
+            {
+                refused_noise.push(RefusedRecord {
+                    line: lines.noise[k],
+                    what: NOISE_WHAT[k],
+                    why: Implausible::Noise { value, limit },
+                });
+                *slot = None;
+            }
+        }
         let mut arrival = f64::NEG_INFINITY;
         let mut unknown = 0;
         let mut sightings = Vec::with_capacity(log.measurements.len());
-        let mut sighting_lines = Vec::with_capacity(lines.len());
+        let mut sighting_lines = Vec::with_capacity(lines.measurements.len());
         let mut refused_times = Vec::new();
         let times: Vec<f64> = log.measurements.iter().map(|m| m.time).collect();
         let problems = time_problems(&times, log.odometry.last().map(|o| o.time));
         for (i, (m, problem)) in log.measurements.iter().zip(problems).enumerate() {
-            let line = lines.get(i).copied();
+            let line = lines.measurements.get(i).copied();
             if let Some(problem) = problem {
                 refused_times.push(RefusedTime {
                     line,
@@ -257,7 +342,7 @@ impl Log {
                 unknown += 1;
             }
         }
-        Self {
+        Ok(Self {
             name: name.to_string(),
             landmarks: log
                 .landmarks
@@ -275,10 +360,43 @@ impl Log {
             robot_sightings: 0,
             unknown_sightings: unknown,
             sensor: log.sensor.unwrap_or_default(),
-            noise: log.noise,
-            sighting_lines,
+            noise,
+            refused_noise,
+            lines: Lines {
+                measurements: sighting_lines,
+                ..lines.clone()
+            },
             refused_times,
-        }
+        })
+    }
+
+    /// Why `limits` refuses odometry record `i` ([`Limits::check_odometry`]:
+    /// its speed, turn rate, and time since the record listed before it),
+    /// if it does. The replay skips such a record (the velocities before
+    /// it held).
+    #[must_use]
+    pub fn odometry_problem(&self, i: usize, limits: &Limits) -> Option<Implausible> {
+        let o = self.odometry.get(i)?;
+        let gap = i
+            .checked_sub(1)
+            .and_then(|p| self.odometry.get(p))
+            .map(|p| o.time - p.time);
+        limits.check_odometry(o.v, o.omega, gap).err()
+    }
+
+    /// The odometry records `limits` refuses, in log order, with their
+    /// lines ([`Log::odometry_problem`]).
+    pub fn refused_odometry<'a>(
+        &'a self,
+        limits: &'a Limits,
+    ) -> impl Iterator<Item = RefusedRecord> + 'a {
+        (0..self.odometry.len()).filter_map(move |i| {
+            self.odometry_problem(i, limits).map(|why| RefusedRecord {
+                line: self.lines.odometry.get(i).copied(),
+                what: "odometry",
+                why,
+            })
+        })
     }
 
     /// Reads a Locus CSV log file (`.xz` read directly; `FILE.xz` tried if
@@ -286,13 +404,14 @@ impl Log {
     ///
     /// # Errors
     /// Missing file (named), a path that is not a regular file (what it
-    /// is), malformed line (file and line).
-    pub fn locus_csv(path: &Path) -> locus_logs::Result<Self> {
+    /// is), malformed line (file and line), an implausible record
+    /// ([`Log::from_locus`]).
+    pub fn locus_csv(path: &Path) -> Result<Self, Error> {
         let (log, lines, _) = locus_csv::read_with_lines(path)?;
         let name = path
             .file_name()
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-        Ok(Self::from_locus_lines(&name, log, &lines))
+        Self::from_locus_lines(&name, log, &lines)
     }
 
     /// The log as a Locus CSV log (measurements in arrival order), e.g. to
@@ -390,9 +509,9 @@ mod tests {
         let text = "landmark,6,1,2\nodometry,0,0,0\nodometry,10,0,0\n\
                     measurement,1,6,2,0.1\nmeasurement,1000000,6,2,0.1\nmeasurement,2,6,2,0.1\n";
         let (csv, lines) = locus_csv::parse_with_lines(text, Path::new("t.csv")).unwrap();
-        assert_eq!(lines, [4, 5, 6]);
-        let log = Log::from_locus_lines("t", csv, &lines);
-        assert_eq!(log.sighting_lines, [4, 6]);
+        assert_eq!(lines.measurements, [4, 5, 6]);
+        let log = Log::from_locus_lines("t", csv, &lines).unwrap();
+        assert_eq!(log.lines.measurements, [4, 6]);
         assert_eq!(log.sightings.len(), 2);
         assert_eq!(log.sightings[1].arrival, 2.0, "not 1e6");
         assert_eq!(log.refused_times.len(), 1);
@@ -409,7 +528,7 @@ mod tests {
             "sensor,0.1,-0.05,0.2\nnoise,q_v,0.02\nnoise,sigma_bearing,0.05\n\
              landmark,6,1,2\nodometry,0,0,0\nmeasurement,0.5,6,2,0.1\n",
         );
-        let log = Log::from_locus("t", csv.clone());
+        let log = Log::from_locus("t", csv.clone()).unwrap();
         assert_eq!(
             log.sensor,
             SensorMount {
@@ -422,19 +541,19 @@ mod tests {
         assert_eq!(log.noise.sigma_bearing, Some(0.05));
         assert_eq!(log.noise.q_omega, None);
         assert_eq!(log.to_locus(), csv);
-        assert_eq!(Log::from_locus("t", log.to_locus()), log);
+        assert_eq!(Log::from_locus("t", log.to_locus()).unwrap(), log);
     }
 
     #[test]
     fn a_centred_sensor_is_the_default_and_is_not_written() {
         let csv = parse("landmark,6,1,2\nodometry,0,0,0\n");
-        let log = Log::from_locus("t", csv.clone());
+        let log = Log::from_locus("t", csv.clone()).unwrap();
         assert_eq!(log.sensor, SensorMount::default());
         assert_eq!(log.noise, NoiseRecords::default());
         assert_eq!(log.to_locus(), csv);
         // Given explicitly, it reads the same and is left out on the way back.
         let explicit =
-            Log::from_locus("t", parse("sensor,0,0,0\nlandmark,6,1,2\nodometry,0,0,0\n"));
+            Log::from_locus("t", parse("sensor,0,0,0\nlandmark,6,1,2\nodometry,0,0,0\n")).unwrap();
         assert_eq!(explicit, log);
         assert_eq!(explicit.to_locus().sensor, None);
     }

@@ -45,6 +45,10 @@ pub struct Report {
     /// Sightings refused before the replay for an implausible time stamp
     /// ([`Log::refused_times`](crate::Log::refused_times)).
     pub implausible_time: usize,
+    /// Odometry records refused as implausible
+    /// ([`Log::odometry_problem`](crate::Log::odometry_problem)): not
+    /// applied, the velocities before each held.
+    pub implausible_odometry: usize,
     /// Robot-to-robot sightings left out by the log.
     pub robot_sightings: usize,
     /// Sightings of unknown targets left out by the log.

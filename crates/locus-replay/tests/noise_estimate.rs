@@ -209,7 +209,7 @@ fn a_bearing_offset_a_robot_standing_still_cannot_tell_is_held() {
             )),
         })
         .collect();
-    log.sighting_lines.clear();
+    log.lines.measurements.clear();
     let overrides = Overrides {
         estimation: Estimation::Noise,
         ..Overrides::default()

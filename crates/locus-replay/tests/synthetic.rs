@@ -54,7 +54,8 @@ fn run(late: bool) -> (Vec<Step>, locus_replay::Report) {
     let log = Log::from_locus(
         "synthetic",
         locus_csv::parse(&text(late), Path::new("s.csv")).unwrap(),
-    );
+    )
+    .unwrap();
     let mut steps = Vec::new();
     let r = replay(&log, &Config::default(), |s| steps.push(*s)).unwrap();
     (steps, r)
@@ -85,7 +86,8 @@ fn bad_configurations_and_logs_are_errors() {
     let log = Log::from_locus(
         "s",
         locus_csv::parse(&text(false), Path::new("s.csv")).unwrap(),
-    );
+    )
+    .unwrap();
     let bad = Config {
         sigma_range: 0.0,
         ..Config::default()
@@ -125,7 +127,8 @@ fn the_innovation_likelihood_prefers_the_right_noise() {
     let log = Log::from_locus(
         "s",
         locus_csv::parse(&text(false), Path::new("s.csv")).unwrap(),
-    );
+    )
+    .unwrap();
     let nll = |sigma: f64| {
         let cfg = Config {
             sigma_range: sigma,
@@ -150,7 +153,8 @@ fn a_sighting_the_filter_cannot_use_is_refused_and_the_belief_kept() {
     let clean = Log::from_locus(
         "s",
         locus_csv::parse(&text(false), Path::new("s.csv")).unwrap(),
-    );
+    )
+    .unwrap();
     let mut hostile = clean.clone();
     let mut bad = hostile.sightings[12];
     bad.time -= 0.01;
@@ -218,7 +222,8 @@ fn a_log_with_no_start_and_no_truth_starts_where_its_sightings_put_it() {
     let known = Log::from_locus(
         "s",
         locus_csv::parse(&text(false), Path::new("s.csv")).unwrap(),
-    );
+    )
+    .unwrap();
     let stripped: String = text(false)
         .lines()
         .filter(|l| !l.starts_with("start,") && !l.starts_with("truth,"))
@@ -227,7 +232,8 @@ fn a_log_with_no_start_and_no_truth_starts_where_its_sightings_put_it() {
     let log = Log::from_locus(
         "s",
         locus_csv::parse(&stripped, Path::new("s.csv")).unwrap(),
-    );
+    )
+    .unwrap();
     assert!(log.start.is_none() && log.truth.poses().is_empty());
     let mut last = None;
     let r = replay(&log, &Config::default(), |s| last = Some(*s)).unwrap();

@@ -37,7 +37,7 @@ pub struct HostConfig {
     /// time); the window is 64 buckets. Default 0.05 s.
     pub clock_bucket: f64,
     /// What a telemetry packet may say (top wheel speed, longest period,
-    /// longest IR reading).
+    /// longest IR reading). Default [`Limits::PAPER_001`].
     pub limits: Limits,
 }
 
@@ -55,7 +55,7 @@ impl HostConfig {
             handshake: Duration::from_secs(10),
             quiet: Duration::from_millis(500),
             clock_bucket: 0.05,
-            limits: Limits::default(),
+            limits: Limits::PAPER_001,
         }
     }
 
@@ -82,7 +82,7 @@ impl HostConfig {
         if let Some((_, what)) = checks.into_iter().find(|(ok, _)| !ok) {
             return Err(Error::Config(what));
         }
-        self.limits.validate()?;
+        self.limits.validate().map_err(Error::Config)?;
         l.validate().map_err(localiser_error)
     }
 }

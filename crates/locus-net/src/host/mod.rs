@@ -532,7 +532,7 @@ impl Host {
             .map_or([0.0; 2], |u| [u.d1, u.d2]);
         self.cfg
             .limits
-            .check(elapsed, packets, travel, odometer.wheel().quantum(), t.ir)?;
+            .check_packet(elapsed, packets, travel, odometer.wheel().quantum(), t.ir)?;
         Ok(travel)
     }
 

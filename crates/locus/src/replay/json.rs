@@ -41,6 +41,10 @@ pub(super) struct ReplayMetrics {
     unusable: usize,
     /// Sightings refused for an implausible time stamp.
     implausible_time: usize,
+    /// Sightings where the model predicts no measurement (skipped).
+    no_measurement: usize,
+    /// Odometry records refused as implausible (listed with their line).
+    implausible_odometry: usize,
 }
 
 impl ReplayMetrics {
@@ -70,6 +74,8 @@ impl ReplayMetrics {
             too_late: r.too_late,
             unusable: r.unusable,
             implausible_time: r.implausible_time,
+            no_measurement: r.no_measurement,
+            implausible_odometry: r.implausible_odometry,
         }
     }
 }

@@ -15,6 +15,7 @@ use comfy_table::Table;
 use locus_eval::Sample;
 use locus_logs::mrclam::Dataset;
 use locus_models::laser_wall::Segment;
+use locus_models::plausible::Limits;
 use locus_replay::{Config, Log, Report, Start, StartedFrom, replay};
 
 mod csv_writer;
@@ -157,6 +158,19 @@ struct Common {
     /// with neither always starts this way.
     #[arg(long)]
     start_from_sightings: bool,
+    /// Top speed of the robot, m/s: an odometry record whose speed is
+    /// above it is refused as implausible (counted, listed with its line;
+    /// the velocities before it held). The same rule as the robot link's
+    /// (docs/log-format.md, "Plausibility").
+    #[arg(long, default_value_t = Limits::GENERIC.max_speed, value_parser = crate::args::positive_f64)]
+    max_speed: f64,
+    /// Top turn rate of the robot, rad/s (as --max-speed).
+    #[arg(long, default_value_t = Limits::GENERIC.max_turn_rate, value_parser = crate::args::positive_f64)]
+    max_turn_rate: f64,
+    /// Longest time between two odometry records, s: a record later than
+    /// this after the one before it is refused (as --max-speed).
+    #[arg(long, default_value_t = Limits::GENERIC.max_odometry_gap, value_parser = crate::args::positive_f64)]
+    max_odometry_gap: f64,
     /// Pictures.
     #[command(flatten)]
     pictures: PictureArgs,
@@ -178,6 +192,12 @@ impl Common {
             calibration: locus_replay::Calibration {
                 initial: [self.v_scale, self.omega_scale, 0.0, 0.0],
                 ..locus_replay::Calibration::default()
+            },
+            limits: Limits {
+                max_speed: self.max_speed,
+                max_turn_rate: self.max_turn_rate,
+                max_odometry_gap: self.max_odometry_gap,
+                ..Limits::GENERIC
             },
             ..Config::default()
         }
@@ -234,7 +254,7 @@ pub fn run(args: &Args) -> Result<()> {
             let name = input
                 .file_name()
                 .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-            let log = Log::from_locus_lines(&name, read.log, &read.lines);
+            let log = Log::from_locus_lines(&name, read.log, &read.lines)?;
             if let Some(path) = export {
                 fs::write(path, locus_logs::locus_csv::write(&log.to_locus()))
                     .with_context(|| format!("writing {}", path.display()))?;
@@ -366,10 +386,28 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
     let total = (log.odometry.len() + log.sightings.len()) as u64;
     let bar = progress_bar(total, "{pos}/{len} events, {elapsed} elapsed")?;
     let mut samples: Vec<Sample> = Vec::new();
-    let mut refused: Vec<String> = log
-        .refused_times
-        .iter()
-        .map(|r| {
+    let mut refused = Refused::default();
+    for r in &log.refused_noise {
+        refused.push(|| {
+            format!(
+                "{}: {} refused: implausible, {} (the level left to the flags, the estimate or the default)",
+                place(&log.name, r.line),
+                r.what,
+                r.why
+            )
+        });
+    }
+    for r in log.refused_odometry(&cfg.limits) {
+        refused.push(|| {
+            format!(
+                "{}: odometry record refused: implausible, {} (the velocities before it held)",
+                place(&log.name, r.line),
+                r.why
+            )
+        });
+    }
+    for r in &log.refused_times {
+        refused.push(|| {
             format!(
                 "{}: sighting of landmark {} at {} s refused: implausible time stamp, {}",
                 place(&log.name, r.line),
@@ -377,8 +415,8 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
                 number(r.time),
                 r.problem
             )
-        })
-        .collect();
+        });
+    }
     let report = std::thread::scope(|scope| -> Result<Report> {
         let smoothed = cfg.smooth.then_some(smoothed_path.as_path());
         let mut writer = CsvWriter::start(scope, &csv_path, smoothed)?;
@@ -392,14 +430,16 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
                 let bearing = sighting
                     .bearing
                     .map_or_else(String::new, |b| format!(", bearing {} rad", number(b)));
-                refused.push(format!(
-                    "{}: sighting of landmark {} at {} s (range {} m{bearing}) refused: \
-                     the filter cannot use it: {why}",
-                    place(&log.name, line),
-                    sighting.landmark,
-                    number(sighting.time),
-                    number(sighting.range),
-                ));
+                refused.push(|| {
+                    format!(
+                        "{}: sighting of landmark {} at {} s (range {} m{bearing}) refused: \
+                         the filter cannot use it: {why}",
+                        place(&log.name, line),
+                        sighting.landmark,
+                        number(sighting.time),
+                        number(sighting.range),
+                    )
+                });
             }
             if step.index % 4096 == 0 {
                 bar.set_position(step.index as u64);
@@ -558,24 +598,42 @@ fn number(v: f64) -> String {
     }
 }
 
-/// Sightings refused listed at most.
+/// Refused records listed at most.
 const REFUSED_SHOWN: usize = 20;
 
-/// The refused sightings, one line each (the first [`REFUSED_SHOWN`]).
-fn refused_list(refused: &[String]) -> String {
-    if refused.is_empty() {
+/// The refused records: how many, and the first [`REFUSED_SHOWN`]
+/// described (a log of millions of refused lines keeps 20 strings).
+#[derive(Default)]
+struct Refused {
+    shown: Vec<String>,
+    total: usize,
+}
+
+impl Refused {
+    /// Counts one, described by `describe` if it is among the first.
+    fn push(&mut self, describe: impl FnOnce() -> String) {
+        if self.shown.len() < REFUSED_SHOWN {
+            self.shown.push(describe());
+        }
+        self.total += 1;
+    }
+}
+
+/// The refused records, one line each (the first [`REFUSED_SHOWN`]).
+fn refused_list(refused: &Refused) -> String {
+    if refused.total == 0 {
         return String::new();
     }
-    let mut text = format!("refused sightings ({}):\n", refused.len());
-    for r in refused.iter().take(REFUSED_SHOWN) {
+    let mut text = format!("refused records ({}):\n", refused.total);
+    for r in &refused.shown {
         text.push_str("  ");
         text.push_str(r);
         text.push('\n');
     }
-    if refused.len() > REFUSED_SHOWN {
+    if refused.total > refused.shown.len() {
         text.push_str(&format!(
             "  ... and {} more\n",
-            refused.len() - REFUSED_SHOWN
+            refused.total - refused.shown.len()
         ));
     }
     text
@@ -715,8 +773,16 @@ fn counts_table(cfg: &Config, r: &Report) -> Table {
             format!("{} / {}", r.late, r.too_late),
         ),
         (
+            "sightings where the model predicts none [count, skipped]",
+            format!("{}", r.no_measurement),
+        ),
+        (
             "refused: unusable / implausible time [count, listed below]",
             format!("{} / {}", r.unusable, r.implausible_time),
+        ),
+        (
+            "odometry records refused as implausible [count, listed below]",
+            format!("{}", r.implausible_odometry),
         ),
     ];
     for (k, v) in rows {

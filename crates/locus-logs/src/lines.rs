@@ -1,0 +1,22 @@
+//! Where each record of a log sits in its file, for the messages that name
+//! a record a reader or the replay refuses.
+
+/// The line (1-based) of each record of a log, in the order the log holds
+/// the records; empty (or `None`) where not known (a log built in memory).
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Lines {
+    /// Each measurement's (`measurement` and `range` lines, libRSF's
+    /// `range2`).
+    pub measurements: Vec<usize>,
+    /// Each odometry record's.
+    pub odometry: Vec<usize>,
+    /// Each landmark's (its first line, for a libRSF beacon).
+    pub landmarks: Vec<usize>,
+    /// The `sensor` line's.
+    pub sensor: Option<usize>,
+    /// The `start` line's.
+    pub start: Option<usize>,
+    /// Each `noise` record's, in the order of
+    /// [`NoiseRecords::NAMES`](crate::NoiseRecords::NAMES).
+    pub noise: [Option<usize>; 4],
+}
