@@ -252,7 +252,7 @@ impl Log {
     /// that [`Limits::GENERIC`] refuses (every sighting, or the start,
     /// depends on it: nothing sensible can be replayed).
     pub fn from_locus(name: &str, log: LocusLog) -> Result<Self, Error> {
-        Self::from_locus_lines(name, log, &Lines::default())
+        Self::from_locus_lines(name, log, Lines::default())
     }
 
     /// As [`Log::from_locus`], with the line of each record in the file
@@ -260,7 +260,7 @@ impl Log {
     ///
     /// # Errors
     /// As [`Log::from_locus`].
-    pub fn from_locus_lines(name: &str, log: LocusLog, lines: &Lines) -> Result<Self, Error> {
+    pub fn from_locus_lines(name: &str, log: LocusLog, lines: Lines) -> Result<Self, Error> {
         let limits = Limits::GENERIC;
         let implausible = |line: Option<usize>, what: &'static str, why| Error::Implausible {
             file: name.to_string(),
@@ -364,7 +364,7 @@ impl Log {
             refused_noise,
             lines: Lines {
                 measurements: sighting_lines,
-                ..lines.clone()
+                ..lines
             },
             refused_times,
         })
@@ -411,7 +411,7 @@ impl Log {
         let name = path
             .file_name()
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-        Self::from_locus_lines(&name, log, &lines)
+        Self::from_locus_lines(&name, log, lines)
     }
 
     /// The log as a Locus CSV log (measurements in arrival order), e.g. to
@@ -510,7 +510,7 @@ mod tests {
                     measurement,1,6,2,0.1\nmeasurement,1000000,6,2,0.1\nmeasurement,2,6,2,0.1\n";
         let (csv, lines) = locus_csv::parse_with_lines(text, Path::new("t.csv")).unwrap();
         assert_eq!(lines.measurements, [4, 5, 6]);
-        let log = Log::from_locus_lines("t", csv, &lines).unwrap();
+        let log = Log::from_locus_lines("t", csv, lines.clone()).unwrap();
         assert_eq!(log.lines.measurements, [4, 6]);
         assert_eq!(log.sightings.len(), 2);
         assert_eq!(log.sightings[1].arrival, 2.0, "not 1e6");

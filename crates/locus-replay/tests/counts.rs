@@ -62,7 +62,7 @@ proptest! {
         let (csv, lines) = locus_csv::parse_with_lines(&text, Path::new("any.csv")).unwrap();
         let measurements = csv.measurements.len();
         let odometry = csv.odometry.len();
-        let log = Log::from_locus_lines("any.csv", csv, &lines).unwrap();
+        let log = Log::from_locus_lines("any.csv", csv, lines).unwrap();
         let r = replay(&log, &Config::default(), |_| {});
         let r = match r {
             Ok(r) => r,

@@ -254,7 +254,7 @@ pub fn run(args: &Args) -> Result<()> {
             let name = input
                 .file_name()
                 .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-            let log = Log::from_locus_lines(&name, read.log, &read.lines)?;
+            let log = Log::from_locus_lines(&name, read.log, read.lines)?;
             if let Some(path) = export {
                 fs::write(path, locus_logs::locus_csv::write(&log.to_locus()))
                     .with_context(|| format!("writing {}", path.display()))?;
