@@ -12,6 +12,7 @@ use crate::{Config, Log};
 use locus_logs::mrclam::Odometry;
 
 /// A pose carried forward in time on the odometry.
+#[derive(Clone)]
 pub(crate) struct DeadReckoning<'a> {
     odometry: &'a [Odometry],
     /// The next record not yet in force.
@@ -23,6 +24,10 @@ pub(crate) struct DeadReckoning<'a> {
     time: f64,
     v: f64,
     omega: f64,
+    /// Distance travelled since the start, m.
+    pub travelled: f64,
+    /// Angle turned since the start (the turns either way added), rad.
+    pub turned: f64,
 }
 
 impl<'a> DeadReckoning<'a> {
@@ -40,6 +45,8 @@ impl<'a> DeadReckoning<'a> {
             time,
             v: 0.0,
             omega: 0.0,
+            travelled: 0.0,
+            turned: 0.0,
         };
         if let Some(o) = next.checked_sub(1).map(|i| log.odometry[i]) {
             dr.take(&o);
@@ -55,6 +62,8 @@ impl<'a> DeadReckoning<'a> {
 
     fn go(&mut self, until: f64) {
         if until > self.time {
+            self.travelled += self.v.abs() * (until - self.time);
+            self.turned += self.omega.abs() * (until - self.time);
             let u = Velocities {
                 v: self.v,
                 omega: self.omega,

@@ -108,17 +108,20 @@ pub enum Error {
     NoOdometry,
     /// The log gives no initial pose, has no ground truth to start from at
     /// the first odometry time (a pose, or positions whose first motion
-    /// gives a heading), and its sightings fix none ([`initial`]).
+    /// gives a heading), or [`Config::start`] asks for the sightings' pose;
+    /// and its sightings fix none ([`initial`]).
     #[error(
-        "no initial pose: the log has no start pose, no ground truth to start from at {time} s \
-         (a pose, or positions whose first motion gives the heading), and its first sightings \
-         fix none (at least {min} that agree, on two landmarks or more, within {window} s)",
-        min = initial::MIN_INLIERS,
-        window = initial::WINDOWS[initial::WINDOWS.len() - 1]
+        "no initial pose: {}, and its sightings fix none: {reason}",
+        given(*asked, *time)
     )]
     NoStart {
         /// The first odometry time, s.
         time: f64,
+        /// Whether the start was asked of the sightings
+        /// ([`Start::Sightings`]) rather than missing from the log.
+        asked: bool,
+        /// Why the sightings fix none.
+        reason: initial::NoFix,
     },
     /// The sightings are not in non-decreasing arrival order.
     #[error("sighting {index}: arrival {arrival} s is earlier than the previous one's")]
@@ -607,6 +610,19 @@ fn honest(mut s: locus_eval::Summary, r: &Report, judged: bool) -> locus_eval::S
     s
 }
 
+/// What [`Error::NoStart`] says the start came from: the sightings on
+/// request, or nothing else in the log.
+fn given(asked: bool, time: f64) -> String {
+    if asked {
+        "the start was to come from the sightings".to_string()
+    } else {
+        format!(
+            "the log has no start pose and no ground truth to start from at {time} s (a pose, or \
+             positions whose first motion gives the heading)"
+        )
+    }
+}
+
 /// The initial pose at `t0` (the first odometry time), its covariance and
 /// where it came from, as [`Config::start`] says.
 fn initial_pose(
@@ -649,7 +665,11 @@ fn initial_pose(
             from,
         ));
     }
-    let fix = initial::from_sightings(log, cfg).ok_or(Error::NoStart { time: t0 })?;
+    let fix = initial::from_sightings(log, cfg).map_err(|reason| Error::NoStart {
+        time: t0,
+        asked: cfg.start == Start::Sightings,
+        reason,
+    })?;
     Ok((fix.pose, fix.covariance, StartedFrom::Sightings(fix)))
 }
 

@@ -475,3 +475,143 @@ fn figures_from_the_start_pose_alone_read_n_a() {
     }
     let _ = fs::remove_dir_all(&dir);
 }
+
+/// A log of a robot standing still at `pose` (x, y in m, heading in rad)
+/// for `seconds` (odometry at 50 Hz), with no start and no truth, the
+/// `landmarks` (id, x, y in m) and one exact sighting (range, bearing) of
+/// landmark `id` at each `(t, id)` of `seen`.
+fn still_log(
+    pose: (f64, f64, f64),
+    seconds: u32,
+    landmarks: &[(u32, f64, f64)],
+    seen: &[(f64, u32)],
+) -> String {
+    let mut s = String::new();
+    for (id, x, y) in landmarks {
+        writeln!(s, "landmark,{id},{x},{y}").unwrap();
+    }
+    for i in 0..=seconds * 50 {
+        writeln!(s, "odometry,{},0,0", f64::from(i) * 0.02).unwrap();
+    }
+    for &(t, id) in seen {
+        let &(_, lx, ly) = landmarks.iter().find(|l| l.0 == id).expect("landmark");
+        let r = (lx - pose.0).hypot(ly - pose.1);
+        let b = (ly - pose.1).atan2(lx - pose.0) - pose.2;
+        writeln!(s, "measurement,{t},{id},{r},{b}").unwrap();
+    }
+    s
+}
+
+/// Bug (issue 34, 8): `--start-from-sightings` took a pose that 4 of 51
+/// random sightings supported (12 m off, "+- 0.5 m", no warning), and
+/// landmarks all at one point still gave a "fix". A start from the
+/// sightings must say how many support it and refuse a weak consensus or
+/// a geometry that fixes no heading; collinear landmarks seen with
+/// bearings do fix the pose.
+#[test]
+fn a_start_that_few_sightings_support_or_that_one_point_cannot_fix_is_refused() {
+    let dir = scratch("weak-start");
+    let landmarks = [(1, 3.0, 0.0), (2, 0.0, 3.0), (3, -2.0, -2.0), (4, 4.0, 4.0)];
+    // 51 sightings of random range and bearing (a fixed linear
+    // congruential sequence).
+    let mut state: u64 = 34;
+    let mut uniform = || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        #[allow(clippy::cast_precision_loss)]
+        let u = (state >> 11) as f64 / (1_u64 << 53) as f64;
+        u
+    };
+    let mut random = still_log((1.0, 0.5, 0.3), 12, &landmarks, &[]);
+    for k in 0..51 {
+        let id = 1 + k % 4;
+        let (r, b) = (
+            0.5 + 6.0 * uniform(),
+            core::f64::consts::PI * (2.0 * uniform() - 1.0),
+        );
+        writeln!(random, "measurement,{},{id},{r},{b}", 0.2 * f64::from(k)).unwrap();
+    }
+    let (out, metrics) = replay(&dir, "random.csv", &random, &["--start-from-sightings"]);
+    let stderr = text(&out.stderr);
+    assert!(
+        !out.status.success(),
+        "a fix from random sightings: {}",
+        text(&out.stdout)
+    );
+    assert!(metrics.is_none());
+    assert!(
+        stderr.contains("sightings fix none") && stderr.contains("of 51 sightings agree"),
+        "{stderr}"
+    );
+
+    // Two landmarks at one point: every heading fits.
+    let seen: Vec<(f64, u32)> = (0..40).map(|k| (0.25 * f64::from(k), 1 + k % 2)).collect();
+    let point = still_log((1.0, 0.5, 0.3), 12, &[(1, 3.0, 0.0), (2, 3.0, 0.0)], &seen);
+    let (out, metrics) = replay(&dir, "point.csv", &point, &["--start-from-sightings"]);
+    let stderr = text(&out.stderr);
+    assert!(
+        !out.status.success(),
+        "a fix from one point: {}",
+        text(&out.stdout)
+    );
+    assert!(metrics.is_none());
+    assert!(
+        stderr.contains("sightings fix none") && stderr.contains("apart"),
+        "{stderr}"
+    );
+
+    // Three landmarks on a line, seen with bearings: the pose is fixed.
+    let seen: Vec<(f64, u32)> = (0..60).map(|k| (0.15 * f64::from(k), 1 + k % 3)).collect();
+    let line = still_log(
+        (1.0, 0.5, 0.3),
+        12,
+        &[(1, -2.0, 2.0), (2, 1.0, 2.0), (3, 4.0, 2.0)],
+        &seen,
+    );
+    let (out, metrics) = replay(&dir, "line.csv", &line, &["--start-from-sightings"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let start = &metrics.expect("metrics.json")["start"];
+    let pose = &start["pose"];
+    assert!(
+        (pose[0].as_f64().unwrap() - 1.0).abs() < 0.05
+            && (pose[1].as_f64().unwrap() - 0.5).abs() < 0.05
+            && (pose[2].as_f64().unwrap() - 0.3).abs() < 0.01,
+        "{start}"
+    );
+    // The fix states its support.
+    assert_eq!(start["sightings"], 60, "{start}");
+    assert_eq!(start["inliers"], 60, "{start}");
+    assert_eq!(start["landmarks"], 3, "{start}");
+    assert_eq!(start["inlier_share"], 1.0, "{start}");
+    assert!(
+        (start["baseline_m"].as_f64().unwrap_or(f64::NAN) - 6.0).abs() < 1e-9,
+        "{start}"
+    );
+    let _ = fs::remove_dir_all(&dir);
+}
+
+/// Bug (issue 34, 9): `--start-from-sightings` looked at the first 120
+/// sightings only; when those all saw one landmark it said no two
+/// landmarks were seen within 80 s. A robot that sees one landmark for its
+/// first 100 s (500 sightings) and then three starts from the later ones.
+#[test]
+fn a_start_from_sightings_searches_past_the_first_sightings() {
+    let dir = scratch("late-start");
+    let landmarks = [(1, 3.0, 0.0), (2, 0.0, 3.0), (3, -2.0, -2.0)];
+    let mut seen: Vec<(f64, u32)> = (0..500).map(|k| (0.2 * f64::from(k), 1)).collect();
+    seen.extend((0..60).map(|k| (100.0 + 0.2 * f64::from(k), 1 + k % 3)));
+    let log = still_log((1.0, 0.5, 0.3), 120, &landmarks, &seen);
+    let (out, metrics) = replay(&dir, "late.csv", &log, &["--start-from-sightings"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let start = &metrics.expect("metrics.json")["start"];
+    assert_eq!(start["from"], "sightings");
+    let pose = &start["pose"];
+    assert!(
+        (pose[0].as_f64().unwrap() - 1.0).abs() < 0.05
+            && (pose[1].as_f64().unwrap() - 0.5).abs() < 0.05
+            && (pose[2].as_f64().unwrap() - 0.3).abs() < 0.01,
+        "{start}"
+    );
+    let _ = fs::remove_dir_all(&dir);
+}

@@ -92,7 +92,13 @@ struct StartMetrics {
     std: Option<[f64; 3]>,
     sightings: Option<usize>,
     inliers: Option<usize>,
+    /// `inliers / sightings`.
+    inlier_share: Option<f64>,
     landmarks: Option<usize>,
+    /// Largest distance between two landmarks the inliers see, m.
+    baseline_m: Option<f64>,
+    /// From the first odometry time to the window's first sighting, s.
+    from_s: Option<f64>,
     span_s: Option<f64>,
     rms_m: Option<f64>,
 }
@@ -105,7 +111,10 @@ impl StartMetrics {
             std: None,
             sightings: None,
             inliers: None,
+            inlier_share: None,
             landmarks: None,
+            baseline_m: None,
+            from_s: None,
             span_s: None,
             rms_m: None,
         };
@@ -126,7 +135,10 @@ impl StartMetrics {
                 std: Some([0, 1, 2].map(|k| f.covariance[(k, k)].sqrt())),
                 sightings: Some(f.sightings),
                 inliers: Some(f.inliers),
+                inlier_share: Some(f.share()),
                 landmarks: Some(f.landmarks),
+                baseline_m: Some(f.baseline),
+                from_s: Some(f.from),
                 span_s: Some(f.span),
                 rms_m: Some(f.rms),
             },

@@ -154,8 +154,10 @@ struct Common {
     smooth: bool,
     /// Find the initial pose from the first sightings (the landmarks seen
     /// in the first seconds, carried back by dead reckoning and fitted to
-    /// the map), even when the log has a start pose or ground truth. A log
-    /// with neither always starts this way.
+    /// the map; later windows if those fix none), even when the log has a
+    /// start pose or ground truth. A log with neither always starts this
+    /// way. A pose that fewer than half of a window's sightings support,
+    /// or whose landmarks fix no heading, is refused.
     #[arg(long)]
     start_from_sightings: bool,
     /// Top speed of the robot, m/s: an odometry record whose speed is
@@ -534,13 +536,23 @@ fn started_from(from: &StartedFrom) -> String {
         ),
         StartedFrom::Sightings(f) => {
             let sd = |k: usize| f.covariance[(k, k)].sqrt();
+            let which = if f.later {
+                format!(
+                    "{} sightings of {:.1}-{:.1} s (the earlier ones fix none; carried back by \
+                     dead reckoning, its drift added)",
+                    f.sightings, f.from, f.span
+                )
+            } else {
+                format!("the first {} sightings ({:.1} s)", f.sightings, f.span)
+            };
             format!(
-                "initial pose from the first {} sightings ({:.1} s; {} agree, on {} landmarks, \
-                 rms {:.3} m): x {:.3} +- {:.3} m, y {:.3} +- {:.3} m, heading {:.3} +- {:.3} rad (1 sigma)\n",
-                f.sightings,
-                f.span,
+                "initial pose from {which}; {} of them agree ({:.0} %), on {} landmarks up to \
+                 {:.2} m apart, rms {:.3} m: x {:.3} +- {:.3} m, y {:.3} +- {:.3} m, heading \
+                 {:.3} +- {:.3} rad (1 sigma)\n",
                 f.inliers,
+                100.0 * f.share(),
                 f.landmarks,
+                f.baseline,
                 f.rms,
                 f.pose[0],
                 sd(0),
@@ -560,7 +572,7 @@ fn start_check(log: &Log, cfg: &Config, from: &StartedFrom) -> String {
     let (StartedFrom::Log, Some(start)) = (from, log.start) else {
         return String::new();
     };
-    let Some(fix) = locus_replay::initial::from_sightings(log, cfg) else {
+    let Ok(fix) = locus_replay::initial::from_sightings(log, cfg) else {
         return String::new();
     };
     let pose = locus_core::nalgebra::Vector3::new(start.x, start.y, start.theta);
