@@ -28,8 +28,10 @@ pub struct Args {
     /// Local address to bind (UDP only).
     #[arg(long, default_value = "127.0.0.1:0")]
     bind: String,
-    /// Serial line speed, bits per second (serial only).
-    #[arg(long, default_value_t = 115_200)]
+    /// Serial line speed, bits per second (serial only): 50 to 4000000,
+    /// the standard UART rates' span (0 would mean "hang up" to a serial
+    /// line).
+    #[arg(long, default_value_t = 115_200, value_parser = crate::args::baud)]
     baud: u32,
     /// `square` or a scenario file whose `scenario = "square"` (the robot's
     /// geometry, the filter's Q and R, the controller).
