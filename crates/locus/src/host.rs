@@ -1,5 +1,6 @@
 //! `locus host`: the localisation and control loop for a robot speaking
-//! the link protocol (`docs/protocol.md`).
+//! the link protocol (`docs/protocol.md`). A robot that goes quiet before
+//! the laps are done fails the run (after the table of what was received).
 
 use std::net::{ToSocketAddrs, UdpSocket};
 
@@ -137,5 +138,19 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         table.add_row(vec![k.to_string(), v]);
     }
     println!("{table}");
+    if !report.complete {
+        anyhow::bail!(
+            "the robot went silent for {:.2} s before the run was complete ({} of {} laps): \
+             {} packets received ({} applied), {} lost, {} serial frames dropped; \
+             the run is incomplete (the table above is what was received)",
+            report.silence.as_secs_f64(),
+            report.laps,
+            cfg.laps,
+            c.received(),
+            c.applied,
+            c.lost,
+            report.framing.dropped()
+        );
+    }
     Ok(())
 }

@@ -94,3 +94,49 @@ fn serial_speeds_no_uart_uses_are_refused_naming_the_flag_and_range() {
         }
     }
 }
+
+/// Issue 34, fault 12: when the robot went quiet before the laps were
+/// done (a dropped link, a stream without frame delimiters), `locus host`
+/// printed "0 laps" and exited 0, as for a completed run. A robot killed
+/// mid-run over a real loopback socket: the host still prints what it
+/// received, then fails, saying how long the robot was silent, what was
+/// received and that the run is incomplete.
+#[test]
+fn a_robot_that_goes_silent_before_the_end_fails_the_host_run() {
+    let port = std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let addr = format!("127.0.0.1:{port}");
+    // Real time: two laps of the square take far longer than the test
+    // lets the robot live.
+    let mut robot = Command::new(env!("CARGO_BIN_EXE_locus"))
+        .args(["robot", "--udp", &addr])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("spawn locus robot");
+    let host = Command::new(env!("CARGO_BIN_EXE_locus"))
+        .args(["host", "--robot", &addr])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn locus host");
+    std::thread::sleep(core::time::Duration::from_secs(3));
+    robot.kill().expect("kill the robot");
+    robot.wait().expect("reap the robot");
+    let host = host.wait_with_output().expect("host output");
+    let out = String::from_utf8_lossy(&host.stdout);
+    let err = String::from_utf8_lossy(&host.stderr);
+    assert!(
+        !host.status.success(),
+        "an incomplete run exited 0:\n{out}\n{err}"
+    );
+    assert!(
+        err.contains("silent") && err.contains("incomplete") && err.contains("packets"),
+        "{err}"
+    );
+    // What was received is still printed.
+    assert!(out.contains("packets applied / lost"), "{out}");
+}
