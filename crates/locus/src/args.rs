@@ -32,6 +32,46 @@ pub fn positive_f64(text: &str) -> Result<f64, String> {
     }
 }
 
+/// The slowest serial line speed `--baud` accepts, bits per second: the
+/// lowest standard UART rate.
+pub const MIN_BAUD: u32 = 50;
+/// The fastest serial line speed `--baud` accepts, bits per second: the
+/// top of what common USB-serial and SoC UARTs run (4 Mbaud).
+pub const MAX_BAUD: u32 = 4_000_000;
+
+/// A serial line speed in bits per second, [`MIN_BAUD`]..=[`MAX_BAUD`]:
+/// speed 0 means "hang up" to a real serial line, and a rate beyond what
+/// UARTs run would be rejected or silently rounded by the driver.
+///
+/// # Errors
+/// The text is not a whole number, or it is outside the range.
+pub fn baud(text: &str) -> Result<u32, String> {
+    let range = format!("a UART speed in bits per second, {MIN_BAUD}..={MAX_BAUD}");
+    let v: u64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not {range}"))?;
+    u32::try_from(v)
+        .ok()
+        .filter(|b| (MIN_BAUD..=MAX_BAUD).contains(b))
+        .ok_or_else(|| format!("{v} is outside {range}"))
+}
+
+/// A count of at most `max`.
+///
+/// # Errors
+/// The text is not a whole number, or it is above `max`.
+pub fn count_at_most(text: &str, max: usize) -> Result<usize, String> {
+    let v: u128 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not a whole number"))?;
+    usize::try_from(v)
+        .ok()
+        .filter(|&n| n <= max)
+        .ok_or_else(|| format!("{v} is too many: at most {max}"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -44,5 +84,23 @@ mod tests {
             assert!(positive_f64(bad).is_err(), "{bad}");
         }
         assert!(finite_f64("NaN").is_err());
+    }
+
+    #[test]
+    fn only_uart_speeds_pass() {
+        assert_eq!(baud("115200"), Ok(115_200));
+        assert_eq!(baud("50"), Ok(50));
+        assert_eq!(baud("4000000"), Ok(4_000_000));
+        for bad in ["0", "49", "4000001", "4000000000", "-9600", "9600.5", ""] {
+            assert!(baud(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn counts_above_the_bound_are_refused() {
+        assert_eq!(count_at_most("10", 10), Ok(10));
+        assert!(count_at_most("11", 10).unwrap_err().contains("at most 10"));
+        assert!(count_at_most("100000000000000000000000", 10).is_err());
+        assert!(count_at_most("-1", 10).is_err());
     }
 }

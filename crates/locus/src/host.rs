@@ -1,5 +1,6 @@
 //! `locus host`: the localisation and control loop for a robot speaking
-//! the link protocol (`docs/protocol.md`).
+//! the link protocol (`docs/protocol.md`). A robot that goes quiet before
+//! the laps are done fails the run (after the table of what was received).
 
 use std::net::{ToSocketAddrs, UdpSocket};
 
@@ -28,8 +29,10 @@ pub struct Args {
     /// Local address to bind (UDP only).
     #[arg(long, default_value = "127.0.0.1:0")]
     bind: String,
-    /// Serial line speed, bits per second (serial only).
-    #[arg(long, default_value_t = 115_200)]
+    /// Serial line speed, bits per second (serial only): 50 to 4000000,
+    /// the standard UART rates' span (0 would mean "hang up" to a serial
+    /// line).
+    #[arg(long, default_value_t = 115_200, value_parser = crate::args::baud)]
     baud: u32,
     /// `square` or a scenario file whose `scenario = "square"` (the robot's
     /// geometry, the filter's Q and R, the controller).
@@ -135,5 +138,19 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         table.add_row(vec![k.to_string(), v]);
     }
     println!("{table}");
+    if !report.complete {
+        anyhow::bail!(
+            "the robot went silent for {:.2} s before the run was complete ({} of {} laps): \
+             {} packets received ({} applied), {} lost, {} serial frames dropped; \
+             the run is incomplete (the table above is what was received)",
+            report.silence.as_secs_f64(),
+            report.laps,
+            cfg.laps,
+            c.received(),
+            c.applied,
+            c.lost,
+            report.framing.dropped()
+        );
+    }
     Ok(())
 }

@@ -60,11 +60,24 @@ pub struct Args {
     /// X+, P+ per correction).
     #[arg(long, value_name = "DIR")]
     pub export_vectors: Option<std::path::PathBuf>,
-    /// Random operand pairs per unit in the exported vectors.
-    #[arg(long, default_value_t = 1_000_000, requires = "export_vectors")]
+    /// Random operand pairs per unit in the exported vectors, at most
+    /// 10000000 (about 300 MB per unit's file, held in memory while it is
+    /// written).
+    #[arg(
+        long,
+        default_value_t = 1_000_000,
+        requires = "export_vectors",
+        value_parser = |t: &str| crate::args::count_at_most(t, crate::hw_rtl::MAX_UNIT_VECTORS)
+    )]
     pub unit_vectors: usize,
-    /// Random corrections in core_random.txt.
-    #[arg(long, default_value_t = 10_000, requires = "export_vectors")]
+    /// Random corrections in core_random.txt, at most 1000000 (about
+    /// 500 MB of file, held in memory while it is written).
+    #[arg(
+        long,
+        default_value_t = 10_000,
+        requires = "export_vectors",
+        value_parser = |t: &str| crate::args::count_at_most(t, crate::hw_rtl::MAX_CORE_VECTORS)
+    )]
     pub core_vectors: usize,
     /// Do not simulate the Verilog core (needs Icarus Verilog, `iverilog`).
     #[arg(long)]

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use locus_analysis::hdl::ekf_core::{self, CoreSim};
 use locus_analysis::hdl::fp32::{self, Op};
 use locus_analysis::hw::{self, CoreInputs, HwConfig, Schedule};
@@ -52,16 +52,74 @@ pub struct Exported {
     pub wall45_corrections: usize,
 }
 
+/// The most random operand pairs per unit [`export`] writes: each is a
+/// line of about 30 bytes, and a unit's vectors are held in memory.
+pub const MAX_UNIT_VECTORS: usize = 10_000_000;
+/// The most random corrections [`export`] writes: each is a line of about
+/// 500 bytes, and the corrections are held in memory.
+pub const MAX_CORE_VECTORS: usize = 1_000_000;
+
 /// Writes the test vectors to `dir`: `add.txt`, `sub.txt`, `mul.txt`,
 /// `div.txt` (every pair of special values, then `units` random operand
 /// pairs from the seed [`SEED`]), `core_random.txt` (`corrections` random
 /// corrections) and `core_wall45.txt`, with the expected results of the
 /// Rust models (`cfg`: the units' latencies).
 ///
+/// The files are written into a staging folder beside `dir` and moved
+/// into `dir` only once all are complete, so a failed export leaves no
+/// partly written `dir`.
+///
 /// # Errors
-/// The directory or a file cannot be written; a model error.
+/// A count above [`MAX_UNIT_VECTORS`] or [`MAX_CORE_VECTORS`]; the
+/// directory or a file cannot be written; a model error.
 pub fn export(dir: &Path, units: usize, corrections: usize, cfg: &HwConfig) -> Result<Exported> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    if units > MAX_UNIT_VECTORS {
+        bail!("--unit-vectors {units}: at most {MAX_UNIT_VECTORS}");
+    }
+    if corrections > MAX_CORE_VECTORS {
+        bail!("--core-vectors {corrections}: at most {MAX_CORE_VECTORS}");
+    }
+    let name = dir
+        .file_name()
+        .with_context(|| format!("{}: not a folder name", dir.display()))?;
+    let parent = match dir.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    std::fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
+    let staging = parent.join(format!(
+        ".{}.partial-{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&staging);
+    std::fs::create_dir(&staging).with_context(|| format!("creating {}", staging.display()))?;
+    let written = write_all(&staging, units, corrections, cfg).and_then(|e| {
+        publish(&staging, dir)?;
+        Ok(e)
+    });
+    let _ = std::fs::remove_dir_all(&staging);
+    written
+}
+
+/// Moves the files of `staging` into `dir` (renaming `staging` itself
+/// when `dir` does not exist yet).
+fn publish(staging: &Path, dir: &Path) -> Result<()> {
+    if !dir.exists() {
+        return std::fs::rename(staging, dir)
+            .with_context(|| format!("moving {} to {}", staging.display(), dir.display()));
+    }
+    for entry in std::fs::read_dir(staging)? {
+        let from = entry?.path();
+        let to = dir.join(from.file_name().unwrap_or_default());
+        std::fs::rename(&from, &to)
+            .with_context(|| format!("moving {} to {}", from.display(), to.display()))?;
+    }
+    Ok(())
+}
+
+/// [`export`]'s files, written into `dir`.
+fn write_all(dir: &Path, units: usize, corrections: usize, cfg: &HwConfig) -> Result<Exported> {
     let mut unit_vectors = 0;
     for (i, op) in [Op::Add, Op::Sub, Op::Mul, Op::Div].into_iter().enumerate() {
         let mut vectors = fp32::special_vectors(op);

@@ -23,8 +23,10 @@ pub struct Args {
     /// (docs/protocol.md).
     #[arg(long, conflicts_with = "udp", value_name = "DEVICE")]
     serial: Option<String>,
-    /// Serial line speed, bits per second (with --serial).
-    #[arg(long, default_value_t = 115_200)]
+    /// Serial line speed, bits per second (with --serial): 50 to 4000000,
+    /// the standard UART rates' span (0 would mean "hang up" to a serial
+    /// line).
+    #[arg(long, default_value_t = 115_200, value_parser = crate::args::baud)]
     baud: u32,
     /// `square` or a scenario file whose `scenario = "square"`.
     #[arg(default_value = "square", value_name = "SCENARIO|FILE")]

@@ -35,8 +35,10 @@ pub struct Args {
     /// Local address of the host's UDP socket (with `--robot ADDR`).
     #[arg(long, default_value = "127.0.0.1:0")]
     bind: SocketAddr,
-    /// Serial line speed, bits per second (with `--robot serial:DEVICE`).
-    #[arg(long, default_value_t = 115_200)]
+    /// Serial line speed, bits per second (with `--robot serial:DEVICE`):
+    /// 50 to 4000000, the standard UART rates' span (0 would mean "hang
+    /// up" to a serial line).
+    #[arg(long, default_value_t = 115_200, value_parser = crate::args::baud)]
     baud: u32,
 }
 

@@ -17,6 +17,14 @@
 //!   the tuning logs) over the noise and the initial scale factors.
 //! * `--objective truth`: the same search on the summed position RMSE
 //!   against the ground truth (tuning *on* the truth, for comparison).
+//!
+//! A tuning log whose estimate cannot be computed (fewer than two odometry
+//! records, no landmark sightings, an estimate that fails or comes out
+//! non-finite or not positive) is named with the cause in a warning and left out: one
+//! such log would otherwise move every median to another log's value. The
+//! run fails, naming each log and its cause, when no log is left. A figure
+//! of the table that cannot be computed (no motion compared with the
+//! truth, no sighting judged) reads "n/a".
 
 use std::path::PathBuf;
 
@@ -139,26 +147,65 @@ impl CostFunction for Problem<'_> {
 /// Runs `locus tune`.
 ///
 /// # Errors
-/// Unreadable logs, a failed replay or optimisation, standard output closed.
+/// Unreadable logs, no tuning log with an estimate, a failed replay or
+/// optimisation, standard output closed.
 pub fn run(args: &Args) -> Result<()> {
     let (source, tuned_on, held_out) = read_logs(args)?;
-    let tune_logs: Vec<Log> = tuned_on.iter().map(|(_, l)| l.clone()).collect();
     let start = Config::default();
+    // Logs with nothing to estimate from are left out before any work.
+    let mut left_out: Vec<LeftOut> = Vec::new();
+    let usable: Named = tuned_on
+        .iter()
+        .filter(|(name, log)| match no_basis(log) {
+            Some(cause) => {
+                left_out.push(LeftOut {
+                    name: name.clone(),
+                    cause,
+                });
+                false
+            }
+            None => true,
+        })
+        .cloned()
+        .collect();
     let (tuned, how) = match args.objective {
-        Objective::Drift => drift_on(&tune_logs, &start)?,
-        Objective::Estimate => estimate_on(&tune_logs, &start)?,
-        Objective::Nll | Objective::Truth => nelder_mead(args, &tune_logs, &start)?,
+        Objective::Drift => drift_on(&usable, &start, &mut left_out)?,
+        Objective::Estimate => estimate_on(&usable, &start, &mut left_out)?,
+        Objective::Nll | Objective::Truth => {
+            let logs: Vec<Log> = usable.iter().map(|(_, l)| l.clone()).collect();
+            if logs.is_empty() {
+                return Err(none_left(&left_out));
+            }
+            nelder_mead(args, &logs, &start)?
+        }
     };
+    for l in &left_out {
+        eprintln!(
+            "locus tune: warning: {} left out of the tuning: its estimate cannot be computed: {}",
+            l.name, l.cause
+        );
+    }
     let names = |logs: &[(String, Log)]| {
         logs.iter()
             .map(|(n, _)| n.as_str())
             .collect::<Vec<_>>()
             .join(", ")
     };
+    let tuned_names: Named = tuned_on
+        .iter()
+        .filter(|(n, _)| !left_out.iter().any(|l| &l.name == n))
+        .cloned()
+        .collect();
     let mut text = format!(
-        "locus tune {source}: objective {:?}, tuned on {} ({how}), held out {}\n",
+        "locus tune {source}: objective {:?}, tuned on {} ({how}){}, held out {}\n",
         args.objective,
-        names(&tuned_on),
+        names(&tuned_names),
+        if left_out.is_empty() {
+            String::new()
+        } else {
+            let each: Vec<&str> = left_out.iter().map(|l| l.name.as_str()).collect();
+            format!(", left out {} (no estimate)", each.join(", "))
+        },
         if held_out.is_empty() {
             "none".to_string()
         } else {
@@ -210,38 +257,45 @@ pub fn run(args: &Args) -> Result<()> {
         "worst inside 3 sigma, x/y/theta, built-in / tuned [%]",
         "innovation NLL built-in / tuned",
     ]);
+    let role = |n: &String| {
+        if left_out.iter().any(|l| &l.name == n) {
+            "left out (no estimate)"
+        } else {
+            "tuned on"
+        }
+    };
     let all = tuned_on
         .iter()
-        .map(|(n, l)| (n, "tuned on", l))
+        .map(|(n, l)| (n, role(n), l))
         .chain(held_out.iter().map(|(n, l)| (n, "held out", l)));
     for (robot, role, log) in all {
         let a: Report = replay(log, &start, |_| {})?;
         let b: Report = replay(log, &tuned, |_| {})?;
-        let (sa, sb) = (&a.summary, &b.summary);
+        // Against the truth: only over a run that moved and was compared.
+        let moved = |r: &Report| r.odometry >= 2 && r.compared >= 2;
+        let judged = |r: &Report| r.applied + r.gated > 0;
+        let pair = |f: &dyn Fn(&Report) -> Option<f64>, decimals: usize| {
+            let one = |r: &Report| {
+                f(r).filter(|v| v.is_finite())
+                    .map_or_else(|| "n/a".to_string(), |v| format!("{v:.decimals$}"))
+            };
+            format!("{} / {}", one(&a), one(&b))
+        };
         table.add_row(vec![
             robot.to_string(),
             role.to_string(),
-            format!("{:.3} / {:.3}", sa.ekf_position_rmse, sb.ekf_position_rmse),
-            format!(
-                "{:.2} / {:.2}",
-                sa.ekf_heading_rmse.to_degrees(),
-                sb.ekf_heading_rmse.to_degrees()
+            pair(&|r| moved(r).then_some(r.summary.ekf_position_rmse), 3),
+            pair(
+                &|r| moved(r).then_some(r.summary.ekf_heading_rmse.to_degrees()),
+                2,
             ),
-            format!(
-                "{:.3} / {:.3}",
-                sa.odometry_position_rmse, sb.odometry_position_rmse
+            pair(&|r| moved(r).then_some(r.summary.odometry_position_rmse), 3),
+            pair(&|r| judged(r).then(|| 100.0 * r.gated_share()), 2),
+            pair(
+                &|r| moved(r).then(|| 100.0 * worst(&r.summary.within_3_sigma)),
+                1,
             ),
-            format!(
-                "{:.2} / {:.2}",
-                100.0 * a.gated_share(),
-                100.0 * b.gated_share()
-            ),
-            format!(
-                "{:.1} / {:.1}",
-                100.0 * worst(&sa.within_3_sigma),
-                100.0 * worst(&sb.within_3_sigma)
-            ),
-            format!("{:.0} / {:.0}", a.innovation_nll, b.innovation_nll),
+            pair(&|r| judged(r).then_some(r.innovation_nll), 0),
         ]);
     }
     text.push_str(&format!("{table}\n"));
@@ -343,36 +397,112 @@ fn median(mut values: Vec<f64>) -> f64 {
     values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
-/// `estimate` on each of `logs`, in order, with a progress bar.
-fn each_log<T>(logs: &[Log], estimate: impl Fn(&Log) -> Result<T>) -> Result<Vec<T>> {
+/// A tuning log left out of the tuning, and why.
+struct LeftOut {
+    name: String,
+    cause: String,
+}
+
+/// Why `log` has nothing to estimate from, if so: fewer than two odometry
+/// records (no motion) or no landmark sightings (no innovation).
+fn no_basis(log: &Log) -> Option<String> {
+    let n = log.odometry.len();
+    if n < 2 {
+        Some(format!(
+            "{n} odometry record{}: no motion to estimate from (at least 2 needed)",
+            if n == 1 { "" } else { "s" }
+        ))
+    } else if log.sightings.is_empty() {
+        Some("no landmark sightings: no innovation to estimate from".to_string())
+    } else {
+        None
+    }
+}
+
+/// The error of a run whose every tuning log was left out.
+fn none_left(left_out: &[LeftOut]) -> anyhow::Error {
+    let each: Vec<String> = left_out
+        .iter()
+        .map(|l| format!("{}: {}", l.name, l.cause))
+        .collect();
+    anyhow!(
+        "no tuning log has an estimate, nothing to tune on: {}",
+        each.join("; ")
+    )
+}
+
+/// `estimate` on each of `logs`, in order, with a progress bar; the
+/// estimates of the logs where it succeeds and every named value (`values`)
+/// is finite and `> 0` (`>= 0` for a delay), the others added to
+/// `left_out` with the cause. Fails when no log is left.
+fn each_log<T>(
+    logs: &[(String, Log)],
+    estimate: impl Fn(&Log) -> Result<T>,
+    values: impl Fn(&T) -> Vec<(&'static str, f64)>,
+    left_out: &mut Vec<LeftOut>,
+) -> Result<Vec<T>> {
     let bar = progress_bar(
         logs.len() as u64,
         "{pos}/{len} logs estimated, {elapsed} elapsed",
     )?;
     let mut each = Vec::with_capacity(logs.len());
-    for log in logs {
-        each.push(estimate(log)?);
+    for (name, log) in logs {
+        let cause = match estimate(log) {
+            Ok(e) => {
+                let bad = values(&e).into_iter().find(|&(k, v)| {
+                    !v.is_finite() || v < 0.0 || (v == 0.0 && k != "odometry delay")
+                });
+                match bad {
+                    None => {
+                        each.push(e);
+                        None
+                    }
+                    Some((k, v)) => {
+                        Some(format!("its {k} came out {v} (the log does not tell it)"))
+                    }
+                }
+            }
+            Err(e) => Some(format!("{e:#}")),
+        };
+        if let Some(cause) = cause {
+            left_out.push(LeftOut {
+                name: name.clone(),
+                cause,
+            });
+        }
         bar.inc(1);
     }
     bar.finish_and_clear();
+    if each.is_empty() {
+        return Err(none_left(left_out));
+    }
     Ok(each)
 }
 
 /// The odometry delay and then `locus_replay::drift::process_noise` on
 /// each log from `start`, combined by the median of each; and how it was
 /// reached.
-fn drift_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
-    let each = each_log(logs, |log| {
-        let (delay, _) = locus_replay::noise::estimate_delay(log, start)
-            .with_context(|| format!("estimating the odometry delay of {}", log.name))?;
-        let cfg = Config {
-            odometry_delay: delay,
-            ..*start
-        };
-        let d = locus_replay::drift::process_noise(log, &cfg)
-            .with_context(|| format!("estimating the process noise of {}", log.name))?;
-        Ok((d.q_v, d.q_omega, delay))
-    })?;
+fn drift_on(
+    logs: &[(String, Log)],
+    start: &Config,
+    left_out: &mut Vec<LeftOut>,
+) -> Result<(Config, String)> {
+    let each = each_log(
+        logs,
+        |log| {
+            let (delay, _) = locus_replay::noise::estimate_delay(log, start)
+                .with_context(|| format!("estimating the odometry delay of {}", log.name))?;
+            let cfg = Config {
+                odometry_delay: delay,
+                ..*start
+            };
+            let d = locus_replay::drift::process_noise(log, &cfg)
+                .with_context(|| format!("estimating the process noise of {}", log.name))?;
+            Ok((d.q_v, d.q_omega, delay))
+        },
+        |e| vec![("q_v", e.0), ("q_omega", e.1), ("odometry delay", e.2)],
+        left_out,
+    )?;
     let tuned = Config {
         q_v: median(each.iter().map(|e| e.0).collect()),
         q_omega: median(each.iter().map(|e| e.1).collect()),
@@ -390,18 +520,35 @@ fn drift_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
 /// What `locus replay` estimates from each log with no flags
 /// (`locus_replay::policy::settle`, `Estimation::Noise`), combined by the
 /// median of each value; and how it was reached.
-fn estimate_on(logs: &[Log], start: &Config) -> Result<(Config, String)> {
+fn estimate_on(
+    logs: &[(String, Log)],
+    start: &Config,
+    left_out: &mut Vec<LeftOut>,
+) -> Result<(Config, String)> {
     use locus_replay::policy::{Estimation, Overrides, settle};
     let overrides = Overrides {
         estimation: Estimation::Noise,
         ..Overrides::default()
     };
     let base = crate::replay::default_config();
-    let each = each_log(logs, |log| {
-        Ok(settle(log, &base, &overrides)
-            .with_context(|| format!("estimating the noise of {}", log.name))?
-            .config)
-    })?;
+    let each = each_log(
+        logs,
+        |log| {
+            Ok(settle(log, &base, &overrides)
+                .with_context(|| format!("estimating the noise of {}", log.name))?
+                .config)
+        },
+        |c| {
+            vec![
+                ("q_v", c.q_v),
+                ("q_omega", c.q_omega),
+                ("sigma_range", c.sigma_range),
+                ("sigma_bearing", c.sigma_bearing),
+                ("odometry delay", c.odometry_delay),
+            ]
+        },
+        left_out,
+    )?;
     let pick = |f: fn(&Config) -> f64| median(each.iter().map(f).collect());
     let tuned = Config {
         q_v: pick(|c| c.q_v),

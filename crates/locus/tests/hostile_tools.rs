@@ -351,3 +351,27 @@ fn a_closed_pipe_ends_every_command_quietly() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 34, fault 10: `locus hw --export-vectors DIR --core-vectors
+/// 10000000000` aborted on a failed allocation (exit 134) and left DIR
+/// partly written. Vector counts have a stated upper bound checked before
+/// any work, and the error names the flag and the bound; DIR is not
+/// created.
+#[test]
+fn huge_vector_counts_are_refused_up_front_and_leave_no_folder() {
+    let dir = scratch("hw-vectors");
+    let out = dir.join("vectors");
+    for (flag, count) in [
+        ("--core-vectors", "10000000000"),
+        ("--unit-vectors", "100000000000"),
+    ] {
+        let err = fails_fast(&["hw", "--export-vectors", s(&out), flag, count], 10.0);
+        assert!(
+            err.contains(flag) && err.contains("at most"),
+            "{flag} {count}: {err}"
+        );
+        assert!(!err.contains("memory allocation"), "{err}");
+        assert!(!out.exists(), "{flag} {count}: a folder was written");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

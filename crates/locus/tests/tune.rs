@@ -138,3 +138,96 @@ fn tune_combines_what_the_replay_estimates_from_each_log() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Runs `locus tune` with `args`, whatever its exit status.
+fn tune_run(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_locus"))
+        .arg("tune")
+        .args(args)
+        .output()
+        .expect("run locus tune")
+}
+
+/// MRCLAM robot `robot` as a Locus CSV log (what `locus replay mrclam
+/// --export` writes), its lines kept where `keep(kind, time)` says.
+fn cut_log(robot: u32, path: &Path, keep: impl Fn(&str, f64) -> bool) {
+    let dataset = locus_logs::mrclam::Dataset::open(Path::new(data())).unwrap();
+    let log = locus_replay::Log::mrclam(&dataset, robot).unwrap();
+    let text = locus_logs::locus_csv::write(&log.to_locus());
+    let mut out = String::new();
+    for line in text.lines() {
+        let mut fields = line.split(',');
+        let kind = fields.next().unwrap_or("");
+        let time = fields.next().and_then(|t| t.parse::<f64>().ok());
+        let timed = matches!(kind, "odometry" | "measurement" | "range" | "truth");
+        if !timed || keep(kind, time.unwrap()) {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    std::fs::write(path, out).unwrap();
+}
+
+/// Issue 34, fault 6: a robot's log cut to a single odometry record has no
+/// estimate, yet `locus tune` put its value into the median (the tuned q_v
+/// moved to another robot's), showed RMSE 0.000 for it and exited 0; tuning
+/// on it alone said "q_v must be finite and > 0", naming neither log nor
+/// cause. A log whose estimate cannot be computed is named with the cause
+/// in a warning and left out of the median; its figures read "n/a"; with
+/// no log left the run fails with that message.
+#[test]
+fn a_log_without_an_estimate_is_named_and_left_out_of_the_median() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("tune-near-empty");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let (a, b, one) = (dir.join("a.csv"), dir.join("b.csv"), dir.join("one.csv"));
+    // Two short logs that tell an estimate, and one cut to its first
+    // odometry record.
+    let first = |robot: u32| {
+        let dataset = locus_logs::mrclam::Dataset::open(Path::new(data())).unwrap();
+        locus_replay::Log::mrclam(&dataset, robot).unwrap().odometry[0].time
+    };
+    let (t1, t2, t3) = (first(1), first(2), first(3));
+    cut_log(1, &a, |_, t| t < t1 + 150.0);
+    cut_log(2, &b, |_, t| t < t2 + 150.0);
+    cut_log(3, &one, |kind, t| kind != "odometry" || t <= t3);
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+
+    let both = tune_run(&[&s(&a), &s(&b)]);
+    assert!(
+        both.status.success(),
+        "{}",
+        String::from_utf8_lossy(&both.stderr)
+    );
+    let both = String::from_utf8(both.stdout).unwrap();
+    let three = tune_run(&[&s(&a), &s(&b), &s(&one)]);
+    let err = String::from_utf8_lossy(&three.stderr);
+    assert!(three.status.success(), "{err}");
+    let text = String::from_utf8(three.stdout).unwrap();
+    // Named, with the cause, and left out: the values are those of the two
+    // logs that have an estimate.
+    assert!(
+        err.contains("one.csv") && err.contains("left out") && err.contains("odometry"),
+        "{err}"
+    );
+    for label in LABELS {
+        assert_eq!(tuned(&text, label), tuned(&both, label), "{label}\n{text}");
+    }
+    // Its row shows no made-up RMSE.
+    let row = text
+        .lines()
+        .find(|l| l.starts_with('│') && l.contains("one.csv"))
+        .unwrap_or_else(|| panic!("no row for one.csv:\n{text}"));
+    assert!(row.contains("n/a") && !row.contains("0.000"), "{row}");
+
+    // Alone: the run fails naming the log and the cause.
+    let alone = tune_run(&[&s(&one)]);
+    let err = String::from_utf8_lossy(&alone.stderr);
+    assert!(
+        !alone.status.success(),
+        "{}",
+        String::from_utf8_lossy(&alone.stdout)
+    );
+    assert!(err.contains("one.csv") && err.contains("odometry"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

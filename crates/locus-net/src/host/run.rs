@@ -27,6 +27,14 @@ pub struct HostReport {
     pub clock: Option<ClockFit>,
     /// Laps of the path completed.
     pub laps: usize,
+    /// Whether the run is complete: every lap of
+    /// [`HostConfig::laps`] was driven before the robot went quiet. A
+    /// run that ends incomplete lost its robot (a dropped link, a stream
+    /// without frame delimiters).
+    pub complete: bool,
+    /// Wall time without telemetry that ended the run (at least
+    /// [`HostConfig::quiet`]).
+    pub silence: Duration,
     /// Commands sent (handshake included).
     pub commands_sent: u64,
     /// IR corrections applied.
@@ -57,7 +65,10 @@ pub fn run_host(
 }
 
 /// Runs the host over `link`, calling `on_step` after each applied
-/// telemetry packet.
+/// telemetry packet, until the robot has been quiet for
+/// [`HostConfig::quiet`]: after the laps, or before them when the link is
+/// lost ([`HostReport::complete`] false; what was received is reported
+/// either way).
 ///
 /// # Errors
 /// [`Error::Timeout`] if no telemetry arrives within `handshake`; link
@@ -77,7 +88,7 @@ pub fn run_host_over(
     let handshake_end = origin + cfg.handshake;
     let mut next_hello = origin;
     let mut last_rx: Option<Instant> = None;
-    loop {
+    let silence = loop {
         let now = Instant::now();
         // Waiting for the first packet: resend the hello; else: quiet end.
         let wait = match last_rx {
@@ -95,7 +106,7 @@ pub fn run_host_over(
             Some(t) => {
                 let end = t + cfg.quiet;
                 if now >= end {
-                    break;
+                    break now - t;
                 }
                 end - now
             }
@@ -123,11 +134,13 @@ pub fn run_host_over(
                 on_step(&step);
             }
         }
-    }
+    };
     Ok(HostReport {
         counters: host.counters(),
         clock: host.clock.estimate(),
         laps: host.laps,
+        complete: host.done(),
+        silence,
         commands_sent,
         corrections: host.corrections,
         filter_errors: host.filter_errors,
