@@ -2,6 +2,8 @@
 //! safety (a NaN watchdog never fires, a negative one never lets the wheels
 //! move) before it binds a socket or waits for a host.
 
+mod common;
+
 use std::process::Command;
 
 #[test]
@@ -33,40 +35,6 @@ fn robot_flags_that_would_disable_its_safety_are_refused_at_start() {
     }
 }
 
-/// Runs `locus` with `args` and asserts it fails within `secs` seconds
-/// (killed there: a serial line left waiting must not hang the test),
-/// returning its standard error.
-fn fails_within(args: &[&str], secs: f64) -> String {
-    use std::io::Read;
-    let mut child = Command::new(env!("CARGO_BIN_EXE_locus"))
-        .args(args)
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("spawn locus");
-    let start = std::time::Instant::now();
-    let status = loop {
-        if let Some(status) = child.try_wait().expect("wait") {
-            break status;
-        }
-        if start.elapsed().as_secs_f64() > secs {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("{args:?} still running after {secs} s (the value was accepted)");
-        }
-        std::thread::sleep(core::time::Duration::from_millis(10));
-    };
-    let mut err = String::new();
-    child
-        .stderr
-        .take()
-        .expect("stderr")
-        .read_to_string(&mut err)
-        .expect("read stderr");
-    assert!(!status.success(), "{args:?} succeeded:\n{err}");
-    err
-}
-
 /// Issue 34, fault 11: `--baud 0` (on a real serial line, speed 0 means
 /// hang up) and `--baud 4000000000` were accepted by `locus host --robot
 /// serial:` and `locus robot --serial`, which then waited on the line. A
@@ -86,7 +54,7 @@ fn serial_speeds_no_uart_uses_are_refused_naming_the_flag_and_range() {
             ["host", "--robot", serial.as_str(), "--baud", baud],
             ["robot", "--serial", device.as_str(), "--baud", baud],
         ] {
-            let err = fails_within(&args, 5.0);
+            let err = common::fails_within(&args, 5.0);
             assert!(
                 err.contains("--baud") && err.contains("50") && err.contains("4000000"),
                 "{args:?}: {err}"

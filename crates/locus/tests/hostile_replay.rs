@@ -532,34 +532,27 @@ fn a_start_that_few_sightings_support_or_that_one_point_cannot_fix_is_refused() 
         );
         writeln!(random, "measurement,{},{id},{r},{b}", 0.2 * f64::from(k)).unwrap();
     }
-    let (out, metrics) = replay(&dir, "random.csv", &random, &["--start-from-sightings"]);
-    let stderr = text(&out.stderr);
-    assert!(
-        !out.status.success(),
-        "a fix from random sightings: {}",
-        text(&out.stdout)
-    );
-    assert!(metrics.is_none());
-    assert!(
-        stderr.contains("sightings fix none") && stderr.contains("of 51 sightings agree"),
-        "{stderr}"
-    );
+    // A refused start: no run, and the reason named.
+    let refused = |name: &str, log: &str, reason: &str| {
+        let (out, metrics) = replay(&dir, name, log, &["--start-from-sightings"]);
+        let stderr = text(&out.stderr);
+        assert!(
+            !out.status.success(),
+            "{name}: a fix: {}",
+            text(&out.stdout)
+        );
+        assert!(metrics.is_none(), "{name}");
+        assert!(
+            stderr.contains("sightings fix none") && stderr.contains(reason),
+            "{name}: {stderr}"
+        );
+    };
+    refused("random.csv", &random, "of 51 sightings agree");
 
     // Two landmarks at one point: every heading fits.
     let seen: Vec<(f64, u32)> = (0..40).map(|k| (0.25 * f64::from(k), 1 + k % 2)).collect();
     let point = still_log((1.0, 0.5, 0.3), 12, &[(1, 3.0, 0.0), (2, 3.0, 0.0)], &seen);
-    let (out, metrics) = replay(&dir, "point.csv", &point, &["--start-from-sightings"]);
-    let stderr = text(&out.stderr);
-    assert!(
-        !out.status.success(),
-        "a fix from one point: {}",
-        text(&out.stdout)
-    );
-    assert!(metrics.is_none());
-    assert!(
-        stderr.contains("sightings fix none") && stderr.contains("apart"),
-        "{stderr}"
-    );
+    refused("point.csv", &point, "apart");
 
     // Three landmarks on a line, seen with bearings: the pose is fixed.
     let seen: Vec<(f64, u32)> = (0..60).map(|k| (0.15 * f64::from(k), 1 + k % 3)).collect();

@@ -2,6 +2,8 @@
 //! must never freeze them, corrupt their outputs or report a false figure.
 //! One test per class of the issue; each names the behaviour it guards.
 
+mod common;
+
 use core::time::Duration;
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -31,39 +33,6 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-/// Runs `args` and asserts it fails within `secs` seconds (killing it
-/// there: a regression must not run for minutes or fill the disk),
-/// returning the error text.
-fn fails_fast(args: &[&str], secs: f64) -> String {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_locus"))
-        .args(args)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn locus");
-    let start = Instant::now();
-    let status = loop {
-        if let Some(status) = child.try_wait().expect("wait") {
-            break status;
-        }
-        if start.elapsed().as_secs_f64() > secs {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("{args:?} still running after {secs} s");
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    };
-    let mut err = String::new();
-    child
-        .stderr
-        .take()
-        .expect("stderr")
-        .read_to_string(&mut err)
-        .expect("read stderr");
-    assert!(!status.success(), "{args:?} succeeded:\n{err}");
-    err
-}
-
 /// `dt = 1e-12` wrote 1.6 GB of log in 15 s; a 50 MB array took 2.7 GB and
 /// then reported "line 0, column 0". The number of steps is bounded up
 /// front, scenario files are read up to a stated size, and a parse error
@@ -74,7 +43,7 @@ fn absurd_runs_and_huge_files_are_refused_up_front_with_a_real_position() {
     let out = dir.join("out");
     let tiny = dir.join("tiny-dt.toml");
     std::fs::write(&tiny, "scenario = \"square\"\ndt = 1e-12\n").unwrap();
-    let err = fails_fast(&["run", s(&tiny), "--no-plots", "--out", s(&out)], 10.0);
+    let err = common::fails_within(&["run", s(&tiny), "--no-plots", "--out", s(&out)], 10.0);
     assert!(
         err.contains("tiny-dt.toml") && err.contains("`dt`"),
         "{err}"
@@ -82,7 +51,7 @@ fn absurd_runs_and_huge_files_are_refused_up_front_with_a_real_position() {
     assert!(err.contains("steps"), "the bound is stated: {err}");
     assert!(!out.join("log.csv").exists(), "no step was logged");
     // --laps that would make the run absurd is refused the same way.
-    let err = fails_fast(
+    let err = common::fails_within(
         &[
             "run",
             "square",
@@ -103,7 +72,7 @@ fn absurd_runs_and_huge_files_are_refused_up_front_with_a_real_position() {
         "scenario = \"square\"\n\nstart = [1.0, 2.0, 3.0, 4.0]\n",
     )
     .unwrap();
-    let err = fails_fast(&["run", s(&bad), "--no-plots", "--out", s(&out)], 10.0);
+    let err = common::fails_within(&["run", s(&bad), "--no-plots", "--out", s(&out)], 10.0);
     assert!(err.contains("line 3, column 1"), "{err}");
     assert!(err.contains("`start`"), "{err}");
     assert!(!err.contains("line 0"), "{err}");
@@ -114,7 +83,7 @@ fn absurd_runs_and_huge_files_are_refused_up_front_with_a_real_position() {
     text.push_str(&"1.0, ".repeat(2_000_000));
     text.push_str("1.0]\n");
     std::fs::write(&huge, text).unwrap();
-    let err = fails_fast(&["run", s(&huge), "--no-plots", "--out", s(&out)], 10.0);
+    let err = common::fails_within(&["run", s(&huge), "--no-plots", "--out", s(&out)], 10.0);
     assert!(err.contains("huge.toml") && err.contains("bytes"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -137,7 +106,7 @@ fn implausible_config_values_name_file_and_field_before_the_run() {
     ] {
         let file = dir.join(format!("{field}.toml"));
         std::fs::write(&file, format!("scenario = \"{kind}\"\n{line}\n")).unwrap();
-        let err = fails_fast(&["run", s(&file), "--no-plots", "--out", s(&out)], 10.0);
+        let err = common::fails_within(&["run", s(&file), "--no-plots", "--out", s(&out)], 10.0);
         assert!(
             err.contains(&format!("{field}.toml, line 2"))
                 && err.contains(&format!("field `{field}`")),
@@ -173,7 +142,7 @@ fn doa_blames_the_right_field_and_checks_everything_before_work() {
     let dir = scratch("doa");
     let nan = dir.join("nan.toml");
     std::fs::write(&nan, "[grid]\nv_g_start = nan\n").unwrap();
-    let err = fails_fast(&["doa", s(&nan), "--out", s(&dir.join("o"))], 10.0);
+    let err = common::fails_within(&["doa", s(&nan), "--out", s(&dir.join("o"))], 10.0);
     assert!(
         err.contains("nan.toml:2") && err.contains("grid.v_g_start"),
         "{err}"
@@ -185,7 +154,7 @@ fn doa_blames_the_right_field_and_checks_everything_before_work() {
         "[grid]\nv_g_count = 1000000000\nalpha_count = 1000000000\n",
     )
     .unwrap();
-    let err = fails_fast(&["doa", s(&huge), "--out", s(&dir.join("o"))], 10.0);
+    let err = common::fails_within(&["doa", s(&huge), "--out", s(&dir.join("o"))], 10.0);
     assert!(err.contains("huge.toml") && err.contains("cells"), "{err}");
 
     // --out under a regular file: refused before any cell is computed.
@@ -252,7 +221,7 @@ fn float_flags_are_checked_before_any_work() {
     let out = dir.join("out");
     for bad in ["-1", "0", "NaN", "inf"] {
         let flag = format!("--ellipse-sigma={bad}");
-        let err = fails_fast(
+        let err = common::fails_within(
             &["run", "square", "--laps", "10", &flag, "--out", s(&out)],
             5.0,
         );
@@ -265,7 +234,7 @@ fn float_flags_are_checked_before_any_work() {
         &["demo", "--ir-sigma", "inf"],
         &["demo", "--scale-error", "NaN"],
     ] {
-        let err = fails_fast(args, 5.0);
+        let err = common::fails_within(args, 5.0);
         assert!(err.contains(args[1]), "{args:?}: {err}");
     }
     let _ = std::fs::remove_dir_all(&dir);
@@ -365,7 +334,7 @@ fn huge_vector_counts_are_refused_up_front_and_leave_no_folder() {
         ("--core-vectors", "10000000000"),
         ("--unit-vectors", "100000000000"),
     ] {
-        let err = fails_fast(&["hw", "--export-vectors", s(&out), flag, count], 10.0);
+        let err = common::fails_within(&["hw", "--export-vectors", s(&out), flag, count], 10.0);
         assert!(
             err.contains(flag) && err.contains("at most"),
             "{flag} {count}: {err}"
