@@ -192,6 +192,9 @@ pub(crate) fn flush<'a>(
         engine.tally = fresh.clone();
         let end = checkpoints.get(j + 1).map(|c| c.next_index);
         while end.is_none_or(|end| engine.next_index < end) && engine.advance()? {}
+        // The pass is deterministic: a re-run stops where the next
+        // checkpoint was taken, between the same two records.
+        debug_assert!(end.is_none_or(|end| engine.next_index == end));
         held = held.max(engine.nodes.len());
         Ok(())
     };
