@@ -544,6 +544,53 @@ impl<T: Scalar, const N: usize, const H: usize, E: Event, X: Copy, const W: usiz
         self.len
     }
 
+    /// The history's events (not yet final), oldest first, each with the
+    /// track after it. With [`RunningFilter::base`],
+    /// [`RunningFilter::monitor`] and the rules, the whole state of the
+    /// filter: [`RunningFilter::restore`] puts it back.
+    pub fn history(&self) -> impl Iterator<Item = &Final<T, N, E, X>> {
+        (0..self.len).filter_map(|i| self.entry(i))
+    }
+
+    /// Puts the filter back in the state read from it earlier: `base`
+    /// ([`RunningFilter::base`]), `history` ([`RunningFilter::history`],
+    /// oldest first) and `monitor`; the rules stay. Everything the filter
+    /// does afterwards is then what it did from that state, to the bit.
+    ///
+    /// For a caller that keeps states to run on from later: they take
+    /// [`RunningFilter::pending`] entries instead of `H`, and the filter is
+    /// set in place (a filter with a long history is large: 0.6 MB for 7
+    /// states and 1024 events; a copy of it through the stack would not
+    /// fit a thread's).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] if `history` holds more than `H` events
+    /// (the filter is then unchanged).
+    pub fn restore<'a>(
+        &mut self,
+        base: &Track<T, N, X>,
+        history: impl ExactSizeIterator<Item = &'a Final<T, N, E, X>>,
+        monitor: &ConsistencyMonitor<W>,
+    ) -> Result<(), Error>
+    where
+        Final<T, N, E, X>: 'a,
+    {
+        if history.len() > H {
+            return Err(Error::InvalidParameter(
+                "restore: a history longer than the filter's",
+            ));
+        }
+        self.base = *base;
+        self.head = 0;
+        self.len = 0;
+        for entry in history {
+            self.history[self.len] = Some(*entry);
+            self.len += 1;
+        }
+        self.monitor = monitor.clone();
+        Ok(())
+    }
+
     /// The NIS consistency monitor.
     pub fn monitor(&self) -> &ConsistencyMonitor<W> {
         &self.monitor

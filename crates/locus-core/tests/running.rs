@@ -161,6 +161,51 @@ fn a_full_history_finalises_its_oldest_event_and_stays_exact() {
     assert_eq!((late, finalised), (2, 8));
 }
 
+/// A filter put back with `restore` from the parts `base`, `history` and
+/// `monitor` read at some point (here into a filter whose ring starts
+/// elsewhere, with other events in it) goes on exactly as the original did
+/// from there, late events and a full history included.
+#[test]
+fn a_restored_filter_goes_on_as_the_original_did() {
+    let events = timeline(11, 300);
+    let mut f = RunningFilter::<f64, 3, 8, Ev, Input>::new(rules(), start());
+    let mut other = RunningFilter::<f64, 3, 8, Ev, Input>::new(rules(), start());
+    for e in &events[..37] {
+        f.insert(*e, apply).unwrap();
+        other.insert(*e, apply).unwrap();
+    }
+    for e in &events[..5] {
+        other.insert(*e, apply).unwrap();
+    }
+    let (base, history, monitor) = (
+        *f.base(),
+        f.history().copied().collect::<Vec<_>>(),
+        f.monitor().clone(),
+    );
+    assert!(history.len() > 2 && history.len() == f.pending());
+    other.restore(&base, history.iter(), &monitor).unwrap();
+    let mut out = (Vec::new(), Vec::new());
+    for e in &events[37..] {
+        out.0.extend(f.insert(*e, apply).unwrap().1);
+        out.1.extend(other.insert(*e, apply).unwrap().1);
+    }
+    while let Some(e) = f.pop_final_before(f64::INFINITY) {
+        out.0.push(e);
+    }
+    while let Some(e) = other.pop_final_before(f64::INFINITY) {
+        out.1.push(e);
+    }
+    assert!(out.0.len() > 200);
+    assert_eq!(out.0, out.1);
+    // More events than the history holds: refused, the filter unchanged.
+    let mut small = RunningFilter::<f64, 3, 2, Ev, Input>::new(rules(), start());
+    assert!(matches!(
+        small.restore(&base, history.iter(), &monitor),
+        Err(Error::InvalidParameter(_))
+    ));
+    assert_eq!(small.pending(), 0);
+}
+
 #[test]
 fn recovery_inflates_after_consecutive_rejections_then_applies() {
     let rules = Rules::new(Ekf::default().with_gate(ChiSquareGate::new(0.99).unwrap()))

@@ -35,7 +35,10 @@
 //!   biases), estimated with it ([`Config::calibration`]).
 //! * **Smoothing.** With [`Config::smooth`], the Rauch-Tung-Striebel
 //!   smoother runs backwards over the final forward pass; each step then
-//!   carries its smoothed pose and the report the smoother's figures.
+//!   carries its smoothed pose and the report the smoother's figures. It
+//!   works in segments re-made from checkpoints of the forward pass
+//!   ([`replay_in_segments`]): its memory grows as the square root of the
+//!   log's length.
 //! * **Gating with recovery.** The running filter's chi-square gate
 //!   ([`Config::gate`]) rejects
 //!   outliers. A filter that has become over-confident would reject every
@@ -75,8 +78,8 @@ mod step;
 
 use locus_core::nalgebra::{SMatrix, SVector, Vector2, Vector3};
 use locus_core::{
-    Belief, ChiSquareGate, Ekf, MeasurementModel, MotionModel, Recovery, Rules, RunningFilter,
-    StudentT, Track, Update, wrap_angle,
+    Belief, ChiSquareGate, ConsistencyMonitor, Ekf, MeasurementModel, MotionModel, Recovery, Rules,
+    RunningFilter, StudentT, Track, Update, wrap_angle,
 };
 use locus_eval::Tally;
 use locus_logs::mrclam::{Odometry, TruthCursor, TruthPose};
@@ -417,7 +420,7 @@ fn calibration_of(b: &Belief<f64, STATE>) -> [(f64, f64); 4] {
 }
 
 /// The replay engine: the running filter and what the report needs.
-struct Engine<'a, F: FnMut(&Step)> {
+struct Engine<'a> {
     cfg: Config,
     log: &'a Log,
     t0: f64,
@@ -425,7 +428,7 @@ struct Engine<'a, F: FnMut(&Step)> {
     next_index: usize,
     tally: Tally,
     report: Report,
-    /// With [`Config::smooth`]: the final steps, until the backward pass.
+    /// The steps made final and not yet taken by the caller.
     held: Vec<Step>,
     /// With [`Config::smooth`]: what the smoother needs of each held step.
     nodes: Vec<smoother::Node>,
@@ -433,10 +436,113 @@ struct Engine<'a, F: FnMut(&Step)> {
     truth: TruthCursor<'a>,
     /// Steps compared with the truth after the start time.
     compared_after_start: usize,
-    sink: F,
+    /// The next odometry record to take, an index into [`Log::odometry`].
+    odometry: usize,
+    /// The next sighting to take, an index into [`Log::sightings`].
+    sightings: usize,
 }
 
-impl<F: FnMut(&Step)> Engine<'_, F> {
+/// The forward pass's state between two records of the log: all that
+/// running it on from there needs (the running filter's base, history and
+/// monitor, the step count, the places in the log and in the truth). The
+/// pass is deterministic, so a run from a checkpoint makes the same steps,
+/// to the bit, as the pass did; the report's counts are not part of it.
+struct Checkpoint<'a> {
+    base: State,
+    /// The running filter's pending events (within [`Config::horizon`]).
+    history: Vec<(Entry, State)>,
+    monitor: ConsistencyMonitor<32>,
+    next_index: usize,
+    truth: TruthCursor<'a>,
+    odometry: usize,
+    sightings: usize,
+}
+
+impl<'a> Engine<'a> {
+    /// The state to run on from, later, with [`Engine::restore`].
+    fn checkpoint(&self) -> Checkpoint<'a> {
+        Checkpoint {
+            base: *self.filter.base(),
+            history: self.filter.history().copied().collect(),
+            monitor: self.filter.monitor().clone(),
+            next_index: self.next_index,
+            truth: self.truth.clone(),
+            odometry: self.odometry,
+            sightings: self.sightings,
+        }
+    }
+
+    /// Goes back to `c`, dropping the held steps.
+    fn restore(&mut self, c: &Checkpoint<'a>) -> Result<(), Error> {
+        self.filter
+            .restore(&c.base, c.history.iter(), &c.monitor)
+            .map_err(|source| Error::Filter {
+                time: c.base.time,
+                line: None,
+                source,
+            })?;
+        self.next_index = c.next_index;
+        self.truth = c.truth.clone();
+        self.odometry = c.odometry;
+        self.sightings = c.sightings;
+        self.held.clear();
+        self.nodes.clear();
+        Ok(())
+    }
+
+    /// Takes the next record of the log (odometry or sighting, whichever
+    /// arrives first) into the filter, the events it makes final into
+    /// [`Engine::held`]; after the last record, makes every event final.
+    /// Returns whether records were left.
+    fn advance(&mut self) -> Result<bool, Error> {
+        let (cfg, log) = (self.cfg, self.log);
+        let (odometry, sighting) = (
+            log.odometry.get(self.odometry),
+            log.sightings.get(self.sightings),
+        );
+        let take_odometry = match (odometry, sighting) {
+            (Some(o), Some(s)) => o.time + cfg.odometry_delay <= s.arrival,
+            (Some(_), None) => true,
+            (None, Some(_)) => false,
+            (None, None) => {
+                self.finalise_before(f64::INFINITY);
+                return Ok(false);
+            }
+        };
+        if take_odometry {
+            if let Some(o) = odometry {
+                let i = self.odometry;
+                self.odometry += 1;
+                // An implausible record is refused: the velocities before
+                // it are held.
+                if log.odometry_problem(i, &cfg.limits).is_some() {
+                    self.report.implausible_odometry += 1;
+                    return Ok(true);
+                }
+                let o = Odometry {
+                    time: o.time + cfg.odometry_delay,
+                    ..*o
+                };
+                self.finalise_before(o.time - cfg.horizon);
+                self.insert(Event::Odometry(o, log.lines.odometry.get(i).copied()))?;
+            }
+        } else if let Some(s) = sighting {
+            let i = self.sightings;
+            self.sightings += 1;
+            self.finalise_before(s.arrival - cfg.horizon);
+            // With a delay within the horizon, every finalised event is
+            // older than the sighting, so the base is never re-run.
+            if s.time <= self.filter.base().time {
+                self.report.too_late += 1;
+                return Ok(true);
+            }
+            let late = s.time < self.filter.time();
+            self.insert(Event::Sighting(*s, log.lines.measurements.get(i).copied()))?;
+            self.report.late += usize::from(late);
+        }
+        Ok(true)
+    }
+
     /// Inserts `event` at its place in canonical order (re-running the
     /// history after it); reports an event made final to make room.
     fn insert(&mut self, event: Event) -> Result<(), Error> {
@@ -534,54 +640,15 @@ impl<F: FnMut(&Step)> Engine<'_, F> {
             self.compared_after_start += usize::from(time > self.t0);
             self.tally.push(&sample);
         }
+        self.held.push(step);
         if self.cfg.smooth {
-            self.held.push(step);
             self.nodes.push(smoother::Node {
                 posterior: after.belief,
                 time,
                 v: after.extra.v,
                 omega: after.extra.omega,
             });
-        } else {
-            (self.sink)(&step);
         }
-    }
-
-    /// With [`Config::smooth`]: the backward pass over the held steps, then
-    /// each step to the sink with its smoothed estimate.
-    fn smooth_and_flush(&mut self) -> Result<(), Error> {
-        if !self.cfg.smooth {
-            return Ok(());
-        }
-        let held = &mut self.held;
-        let mut first_calibration = None;
-        smoother::rts(&self.cfg.motion_model(), &self.nodes, |k, s| {
-            held[k].smoothed = Some(pose_belief(s));
-            held[k].smoothed_calibration = Some(calibration_of(s).map(|c| c.0));
-            if k == 0 {
-                first_calibration = Some(calibration_of(s));
-            }
-        })
-        .map_err(|index| Error::Smoother {
-            time: self.held[index].time,
-        })?;
-        let mut tally =
-            Tally::new(3).map_err(|_| Error::InvalidConfig("NEES degrees of freedom"))?;
-        for step in &self.held {
-            if let Some(sample) = step.smoothed.and_then(|pose| step.sample_of(&pose)) {
-                tally.push(&sample);
-            }
-            (self.sink)(step);
-        }
-        self.report.smoothed = Some(honest(
-            tally.summary(0),
-            &self.report,
-            self.compared_after_start > 0,
-        ));
-        self.report.smoothed_calibration = first_calibration;
-        self.held = Vec::new();
-        self.nodes = Vec::new();
-        Ok(())
     }
 }
 
@@ -677,10 +744,57 @@ fn initial_pose(
 /// with its final estimate, and with [`Config::smooth`] its smoothed one)
 /// to `sink`.
 ///
+/// The smoother works in segments of [`smoothing_segment`] steps (see
+/// [`replay_in_segments`]): its memory grows as the square root of the
+/// log's length, not the length.
+///
 /// # Errors
 /// An invalid configuration, a log with no odometry or no initial pose,
-/// sightings out of arrival order, a filter failure.
+/// sightings out of arrival order, a filter failure, a smoother failure.
 pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report, Error> {
+    let events = log.odometry.len() + log.sightings.len();
+    replay_in_segments(log, cfg, smoothing_segment(events), sink)
+}
+
+/// Steps of the smoother's segments for a log of `events` events (odometry
+/// records and sightings): `sqrt(1024 events)`, at least 2^17.
+///
+/// Checkpointing (Griewank, "Achieving logarithmic growth of temporal and
+/// spatial complexity in reverse automatic differentiation", Optimization
+/// Methods and Software 1(1), 1992, in its one-level form): the forward
+/// pass keeps its state every `segment` steps, and the backward pass
+/// re-makes each segment's steps from it. Memory is then one segment's
+/// steps (0.93 KB each: the step and the 7-state belief the smoother needs)
+/// and `events / segment` checkpoints (the running filter's pending
+/// events, 0.6 KB each: about 40 KB on MRCLAM with its 1 s history, at
+/// most 0.6 MB with the history full at 1024 events); `segment =
+/// sqrt(1024 events)` balances the two in the worst case. A log of at most
+/// 2^17 events is one segment, held whole (at most 122 MB) and run once,
+/// as without checkpoints. For 10^7 events: segments of 2^17 steps
+/// (122 MB) and 76 checkpoints.
+#[must_use]
+pub fn smoothing_segment(events: usize) -> usize {
+    events.saturating_mul(1024).isqrt().max(1 << 17)
+}
+
+/// [`replay`] with the smoother's segments `segment` steps long (at least
+/// 1): a segment's steps are held at once, and the forward pass is re-run
+/// from its checkpoints twice, once for the backward pass (last segment
+/// first) and once to hand the steps over in order. A log of at most
+/// `segment` steps is run once, its steps all held. The steps and the
+/// report are the same to the bit whatever `segment` is (the passes repeat
+/// the same operations on the same values); only
+/// [`Report::smoothing_held`] and [`Report::smoothing_checkpoints`]
+/// differ.
+///
+/// # Errors
+/// As [`replay`].
+pub fn replay_in_segments(
+    log: &Log,
+    cfg: &Config,
+    segment: usize,
+    mut sink: impl FnMut(&Step),
+) -> Result<Report, Error> {
     cfg.validate()?;
     let first = log.odometry.first().ok_or(Error::NoOdometry)?;
     let t0 = first.time;
@@ -750,7 +864,13 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
             dead: pose,
         },
     );
+    // With the smoother: one segment, and what one record can make final.
     let events = log.odometry.len() + log.sightings.len();
+    let hold = if cfg.smooth {
+        segment.min(events).saturating_add(HISTORY)
+    } else {
+        0
+    };
     let mut engine = Engine {
         cfg: *cfg,
         log,
@@ -786,51 +906,45 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
             calibration: calibration_of(&belief),
             smoothed_calibration: None,
             started_from,
+            smoothing_held: 0,
+            smoothing_checkpoints: 0,
         },
-        held: Vec::with_capacity(if cfg.smooth { events } else { 0 }),
-        nodes: Vec::with_capacity(if cfg.smooth { events } else { 0 }),
+        held: Vec::with_capacity(hold),
+        nodes: Vec::with_capacity(hold),
         truth: log.truth.cursor(),
         compared_after_start: 0,
-        sink,
+        odometry: 0,
+        sightings: 0,
     };
-    let mut odometry = log.odometry.iter().enumerate().peekable();
-    let mut sightings = log.sightings.iter().enumerate().peekable();
+    // With the smoother: a checkpoint every `segment` steps, each
+    // segment's steps re-made from its checkpoint for the backward pass
+    // (smoother::flush); until the second checkpoint the steps are held,
+    // so a log of one segment is run once.
+    let segment = segment.max(1);
+    let mut checkpoints = Vec::new();
+    if cfg.smooth {
+        checkpoints.push(engine.checkpoint());
+    }
     loop {
-        let take_odometry = match (odometry.peek(), sightings.peek()) {
-            (Some((_, o)), Some((_, s))) => o.time + cfg.odometry_delay <= s.arrival,
-            (Some(_), None) => true,
-            (None, Some(_)) => false,
-            (None, None) => break,
-        };
-        if take_odometry {
-            if let Some((i, o)) = odometry.next() {
-                // An implausible record is refused: the velocities before
-                // it are held.
-                if log.odometry_problem(i, &cfg.limits).is_some() {
-                    engine.report.implausible_odometry += 1;
-                    continue;
-                }
-                let o = Odometry {
-                    time: o.time + cfg.odometry_delay,
-                    ..*o
-                };
-                engine.finalise_before(o.time - cfg.horizon);
-                engine.insert(Event::Odometry(o, log.lines.odometry.get(i).copied()))?;
+        if let Some(c) = checkpoints.last()
+            && engine.next_index >= c.next_index.saturating_add(segment)
+        {
+            checkpoints.push(engine.checkpoint());
+        }
+        let more = engine.advance()?;
+        if !cfg.smooth {
+            for step in engine.held.drain(..) {
+                sink(&step);
             }
-        } else if let Some((i, s)) = sightings.next() {
-            engine.finalise_before(s.arrival - cfg.horizon);
-            // With a delay within the horizon, every finalised event is
-            // older than the sighting, so the base is never re-run.
-            if s.time <= engine.filter.base().time {
-                engine.report.too_late += 1;
-                continue;
-            }
-            let late = s.time < engine.filter.time();
-            engine.insert(Event::Sighting(*s, log.lines.measurements.get(i).copied()))?;
-            engine.report.late += usize::from(late);
+        } else if checkpoints.len() > 1 {
+            engine.held.clear();
+            engine.nodes.clear();
+        }
+        engine.report.smoothing_held = engine.report.smoothing_held.max(engine.nodes.len());
+        if !more {
+            break;
         }
     }
-    engine.finalise_before(f64::INFINITY);
     let last = engine.filter.base().belief;
     engine.report.final_belief = pose_belief(&last);
     engine.report.calibration = calibration_of(&last);
@@ -839,7 +953,9 @@ pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report
         &engine.report,
         engine.compared_after_start > 0,
     );
-    engine.smooth_and_flush()?;
+    if cfg.smooth {
+        smoother::flush(&mut engine, checkpoints, &mut sink)?;
+    }
     Ok(engine.report)
 }
 

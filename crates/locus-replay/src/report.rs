@@ -76,6 +76,14 @@ pub struct Report {
     pub smoothed_calibration: Option<[(f64, f64); 4]>,
     /// Where the initial pose came from.
     pub started_from: StartedFrom,
+    /// With [`Config::smooth`](crate::Config::smooth): the most steps the
+    /// smoother held at once (one segment's, see
+    /// [`replay_in_segments`](crate::replay_in_segments)); 0 without.
+    pub smoothing_held: usize,
+    /// With [`Config::smooth`](crate::Config::smooth): the checkpoints of
+    /// the forward pass the smoother kept (copies of the running filter,
+    /// one per segment after the first); 0 without.
+    pub smoothing_checkpoints: usize,
 }
 
 /// Where a replay's initial pose came from.

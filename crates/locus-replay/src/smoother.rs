@@ -20,7 +20,12 @@ use locus_core::{Belief, MotionModel, wrap_angle};
 use locus_models::calibrated_unicycle::{BEARING_BIAS, CalibratedUnicycle, Propagation};
 use locus_models::unicycle::Velocities;
 
-use crate::{STATE, StateMatrix, StateVector};
+use locus_eval::Tally;
+
+use crate::{
+    Checkpoint, Engine, Error, STATE, StateMatrix, StateVector, Step, calibration_of, honest,
+    pose_belief,
+};
 
 /// What the backward pass needs of one event of the forward pass: the
 /// prediction from one event to the next is recomputed from these, with the
@@ -82,30 +87,50 @@ fn wrap_angles(mut v: StateVector) -> StateVector {
 /// `keep` with its index, from the last node to the first (the caller keeps
 /// what it needs: the pass holds only the belief ahead).
 ///
+/// `next` is the node that follows the last of `nodes` with its smoothed
+/// belief, when `nodes` is one segment of a longer pass whose later part
+/// is already smoothed; `None` when the last of `nodes` is the pass's last
+/// (its smoothed belief is its filtered one). Either way each belief comes
+/// from the same operations on the same values, so smoothing a pass in
+/// segments, last first, gives the whole pass's beliefs to the bit.
+///
 /// # Errors
-/// The index of the event whose prediction fails or whose predicted
-/// covariance is not positive definite.
+/// The time of the event whose prediction fails or whose predicted
+/// covariance is not positive definite, s.
 pub(crate) fn rts(
     model: &CalibratedUnicycle<f64>,
     nodes: &[Node],
+    next: Option<(&Node, &Belief<f64, STATE>)>,
     mut keep: impl FnMut(usize, &Belief<f64, STATE>),
-) -> Result<(), usize> {
+) -> Result<(), f64> {
     let Some(last) = nodes.last() else {
         return Ok(());
     };
-    let mut ahead = last.posterior;
-    keep(nodes.len() - 1, &ahead);
-    for k in (0..nodes.len() - 1).rev() {
-        if nodes[k + 1].time == nodes[k].time {
+    let (mut ahead, end, beyond) = match next {
+        Some((node, smoothed)) => (*smoothed, nodes.len(), Some(node)),
+        None => {
+            keep(nodes.len() - 1, &last.posterior);
+            (last.posterior, nodes.len() - 1, None)
+        }
+    };
+    for k in (0..end).rev() {
+        // Past the last node only with a `next` (`end` stops before it
+        // otherwise).
+        let Some(following) = nodes.get(k + 1).or(beyond) else {
+            break;
+        };
+        if following.time == nodes[k].time {
             // No prediction between them: C = I, the smoothed belief is
             // the next one's.
             keep(k, &ahead);
             continue;
         }
-        let prior = prediction(model, &nodes[k], &nodes[k + 1]).ok_or(k + 1)?;
+        let prior = prediction(model, &nodes[k], following).ok_or(following.time)?;
         let here = &nodes[k].posterior;
         // C^T = (P-)^-1 F P, as the solution of P- C^T = F P.
-        let ct = Cholesky::new(prior.p).ok_or(k + 1)?.solve(&prior.ap);
+        let ct = Cholesky::new(prior.p)
+            .ok_or(following.time)?
+            .solve(&prior.ap);
         let dx = wrap_angles(ahead.x - prior.x);
         let x = wrap_angles(here.x + ct.tr_mul(&dx));
         // Ps = P + C (Ps+ - P-) C^T: one triangle, the other mirrored.
@@ -124,6 +149,105 @@ pub(crate) fn rts(
         ahead = Belief::new(x, p);
         keep(k, &ahead);
     }
+    Ok(())
+}
+
+/// The end of a smoothed replay: the backward pass over the forward pass
+/// `engine` has made, then each step to `sink` in order with its smoothed
+/// estimate; the report gets the smoother's figures.
+///
+/// `checkpoints[j]` is the forward pass's state at the start of segment
+/// `j` (the first at step 0). With one, `engine` holds every step already.
+/// With more, the segments are re-made from their checkpoints: from the
+/// last to the second for the backward pass, which keeps of each only its
+/// first node and that node's smoothed belief; then from the first to the
+/// last, each smoothed again from the next one's first belief (the same
+/// operations on the same values: the same beliefs to the bit) and handed
+/// over. Memory: one segment and the checkpoints; time: the forward pass
+/// twice more and the backward pass once more.
+///
+/// # Errors
+/// [`Error::Smoother`]; the forward pass's errors (which its first run
+/// would have met).
+pub(crate) fn flush<'a>(
+    engine: &mut Engine<'a>,
+    mut checkpoints: Vec<Checkpoint<'a>>,
+    sink: &mut impl FnMut(&Step),
+) -> Result<(), Error> {
+    let remade = checkpoints.len() > 1;
+    // A checkpoint taken after the last step starts no segment.
+    if remade
+        && checkpoints
+            .last()
+            .is_some_and(|c| c.next_index == engine.next_index)
+    {
+        checkpoints.pop();
+    }
+    let report = engine.report;
+    let model = engine.cfg.motion_model();
+    let fresh = Tally::new(3).map_err(|_| Error::InvalidConfig("NEES degrees of freedom"))?;
+    let mut held = report.smoothing_held;
+    let mut remake = |engine: &mut Engine<'a>, j: usize| -> Result<(), Error> {
+        engine.restore(&checkpoints[j])?;
+        engine.tally = fresh.clone();
+        let end = checkpoints.get(j + 1).map(|c| c.next_index);
+        while end.is_none_or(|end| engine.next_index < end) && engine.advance()? {}
+        // The pass is deterministic: a re-run stops where the next
+        // checkpoint was taken, between the same two records.
+        debug_assert!(end.is_none_or(|end| engine.next_index == end));
+        held = held.max(engine.nodes.len());
+        Ok(())
+    };
+    // bounds[j]: segment j's first node and its smoothed belief.
+    let mut bounds: Vec<Option<(Node, Belief<f64, STATE>)>> = vec![None; checkpoints.len() + 1];
+    if remade {
+        for j in (1..checkpoints.len()).rev() {
+            remake(engine, j)?;
+            let mut first = None;
+            let next = bounds[j + 1].as_ref().map(|(n, b)| (n, b));
+            rts(&model, &engine.nodes, next, |k, s| {
+                if k == 0 {
+                    first = Some(*s);
+                }
+            })
+            .map_err(|time| Error::Smoother { time })?;
+            bounds[j] = engine.nodes.first().copied().zip(first);
+        }
+    }
+    let mut tally = fresh.clone();
+    let mut first_calibration = None;
+    for j in 0..checkpoints.len() {
+        if remade {
+            remake(engine, j)?;
+        }
+        let steps = &mut engine.held;
+        let next = bounds[j + 1].as_ref().map(|(n, b)| (n, b));
+        rts(&model, &engine.nodes, next, |k, s| {
+            steps[k].smoothed = Some(pose_belief(s));
+            steps[k].smoothed_calibration = Some(calibration_of(s).map(|c| c.0));
+            if j == 0 && k == 0 {
+                first_calibration = Some(calibration_of(s));
+            }
+        })
+        .map_err(|time| Error::Smoother { time })?;
+        for step in &engine.held {
+            if let Some(sample) = step.smoothed.and_then(|pose| step.sample_of(&pose)) {
+                tally.push(&sample);
+            }
+            sink(step);
+        }
+    }
+    engine.report = report;
+    engine.report.smoothed = Some(honest(
+        tally.summary(0),
+        &engine.report,
+        engine.compared_after_start > 0,
+    ));
+    engine.report.smoothed_calibration = first_calibration;
+    engine.report.smoothing_held = held;
+    engine.report.smoothing_checkpoints = checkpoints.len() - 1;
+    engine.held = Vec::new();
+    engine.nodes = Vec::new();
     Ok(())
 }
 
@@ -174,7 +298,7 @@ mod tests {
             });
         }
         let mut s = vec![nodes[0].posterior; n];
-        rts(&model, &nodes, |k, b| s[k] = *b).unwrap();
+        rts(&model, &nodes, None, |k, b| s[k] = *b).unwrap();
         // Batch: minimise x0^2/p0 + sum (z_k - x_k)^2/r + sum (x_k - x_{k-1})^2/q.
         let mut a = locus_core::nalgebra::SMatrix::<f64, 6, 6>::zeros();
         let mut b = locus_core::nalgebra::SVector::<f64, 6>::zeros();

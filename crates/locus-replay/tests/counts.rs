@@ -8,7 +8,7 @@ use core::fmt::Write as _;
 use std::path::Path;
 
 use locus_logs::locus_csv;
-use locus_replay::{Config, Log, replay};
+use locus_replay::{Config, Log, replay, replay_in_segments};
 use proptest::prelude::*;
 
 /// A value of any size a CSV field may hold: ordinary, tiny, huge, signed.
@@ -86,5 +86,17 @@ proptest! {
         prop_assert_eq!(odometry, r.odometry + r.implausible_odometry);
         // The belief stays finite whatever the values.
         prop_assert!(r.final_belief.x.iter().all(|v| v.is_finite()), "{:?}", r.final_belief);
+        // The smoother's segments re-run the forward pass from checkpoints:
+        // the counts are the forward pass's, once.
+        let smoothed = Config { smooth: true, ..Config::default() };
+        let s = match replay_in_segments(&log, &smoothed, 7, |_| {}) {
+            Ok(s) => s,
+            Err(e) => return Err(TestCaseError::fail(format!("smoothed replay failed: {e}"))),
+        };
+        prop_assert_eq!(
+            (s.sightings, s.applied, s.gated, s.too_late, s.unusable, s.no_measurement),
+            (r.sightings, r.applied, r.gated, r.too_late, r.unusable, r.no_measurement)
+        );
+        prop_assert_eq!((s.odometry, s.implausible_odometry), (r.odometry, r.implausible_odometry));
     }
 }

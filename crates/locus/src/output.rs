@@ -80,9 +80,11 @@ const EPIPE: i32 = 32;
 
 /// Files a `locus run` or `locus replay` writes into its output directory:
 /// cleared by [`prepare_run_dir`] before the new run writes any.
-pub const RUN_OUTPUTS: [&str; 12] = [
+pub const RUN_OUTPUTS: [&str; 14] = [
     "log.csv",
     "smoothed.csv",
+    "log.csv.partial",
+    "smoothed.csv.partial",
     "runs.csv",
     "metrics.json",
     "map.png",

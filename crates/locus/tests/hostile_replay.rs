@@ -608,3 +608,84 @@ fn a_start_from_sightings_searches_past_the_first_sightings() {
     );
     let _ = fs::remove_dir_all(&dir);
 }
+
+/// Issue 34: a replay killed midway left `log.csv` (and `smoothed.csv`)
+/// under its normal name with no end marker, which a reader could not tell
+/// from a complete one. They are written as `log.csv.partial` and renamed
+/// only when the replay has finished: a killed replay leaves no `log.csv`.
+#[test]
+fn a_killed_replay_leaves_no_log_csv_under_its_normal_name() {
+    use core::time::Duration;
+    use std::process::Stdio;
+    use std::time::Instant;
+
+    let dir = scratch("killed-replay");
+    // 5 000 s at 200 Hz (10^6 odometry records), sightings every 0.5 s:
+    // long enough to be killed while it writes.
+    let mut s = String::from("landmark,1,3,0\nlandmark,2,0,3\nstart,0,0,0,0\n");
+    for i in 0..1_000_000u32 {
+        let t = f64::from(i) * 0.005;
+        writeln!(s, "odometry,{t},0,0").unwrap();
+        if i % 100 == 0 && i > 0 {
+            writeln!(
+                s,
+                "measurement,{t},1,3,0\nmeasurement,{t},2,3,1.5707963267948966"
+            )
+            .unwrap();
+        }
+    }
+    let file = dir.join("long.csv");
+    fs::write(&file, s).expect("write log");
+    let out = dir.join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_locus"))
+        .args(["replay", "csv"])
+        .arg(&file)
+        .args(["--no-estimate", "--no-plots", "--out"])
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start locus");
+    let lines = |name: &str| {
+        fs::read(out.join(name)).map_or(0, |b| b.iter().filter(|&&c| c == b'\n').count())
+    };
+    let started = Instant::now();
+    // Under either name: the old code wrote log.csv itself.
+    while lines("log.csv") + lines("log.csv.partial") < 2000 {
+        if let Some(status) = child.try_wait().expect("poll locus") {
+            panic!("locus ended ({status}) before its log grew");
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(120),
+            "no log after 120 s"
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    child.kill().expect("SIGKILL locus");
+    let status = child.wait().expect("reap locus");
+    assert!(!status.success(), "killed before the end");
+    assert!(
+        !out.join("log.csv").exists(),
+        "a killed replay left log.csv under its normal name"
+    );
+    assert!(lines("log.csv.partial") >= 2000, "the partial log is kept");
+    assert!(!out.join("metrics.json").exists());
+    // A finished replay renames it; a rerun clears the earlier partial one.
+    let file = dir.join("short.csv");
+    fs::write(&file, log(true, "").0).expect("write log");
+    let done = locus(&[
+        "replay",
+        "csv",
+        file.to_str().expect("utf-8"),
+        "--smooth",
+        "--no-plots",
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(done.status.success(), "{}", text(&done.stderr));
+    for name in ["log.csv", "smoothed.csv"] {
+        assert!(out.join(name).exists(), "{name}");
+        assert!(!out.join(format!("{name}.partial")).exists(), "{name}");
+    }
+    let _ = fs::remove_dir_all(&dir);
+}

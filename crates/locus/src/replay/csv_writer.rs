@@ -3,6 +3,11 @@
 //! quarter of the command's time (perf, MRCLAM robot 3), and this way it
 //! runs beside the filter instead of after each step. The bytes are the
 //! same: the steps reach the writer in order.
+//!
+//! Each file is written under a temporary name (`log.csv.partial`) and
+//! renamed to its own once the replay and the writing have both finished:
+//! a replay that is killed or fails leaves no `log.csv` that a reader
+//! could take for a complete one.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -23,6 +28,15 @@ pub(super) struct CsvWriter<'scope> {
     chunk: Vec<Step>,
     tx: Option<SyncSender<Vec<Step>>>,
     handle: ScopedJoinHandle<'scope, Result<()>>,
+    /// Each file's temporary name and its own.
+    names: Vec<(PathBuf, PathBuf)>,
+}
+
+/// The temporary name of `path` while it is written: `path.partial`.
+fn partial(path: &Path) -> PathBuf {
+    let mut name = path.as_os_str().to_owned();
+    name.push(".partial");
+    PathBuf::from(name)
 }
 
 /// `path` created, with `header` as its first line.
@@ -48,17 +62,23 @@ fn write_row(
 }
 
 impl<'scope> CsvWriter<'scope> {
-    /// Creates `log` (and `smoothed`, if given) with their headers and
-    /// starts the writer on `scope`.
+    /// Creates `log` (and `smoothed`, if given) under their temporary
+    /// names ([`partial`]) with their headers and starts the writer on
+    /// `scope`.
     pub(super) fn start(
         scope: &'scope Scope<'scope, '_>,
         log: &Path,
         smoothed: Option<&Path>,
     ) -> Result<Self> {
-        let mut csv = (create(log, Step::csv_header())?, log.to_path_buf());
-        let mut smoothed_csv: Option<(BufWriter<File>, PathBuf)> = smoothed
-            .map(|p| {
-                Ok::<_, anyhow::Error>((create(p, Step::smoothed_csv_header())?, p.to_path_buf()))
+        let names: Vec<(PathBuf, PathBuf)> = core::iter::once(log)
+            .chain(smoothed)
+            .map(|p| (partial(p), p.to_path_buf()))
+            .collect();
+        let mut csv = (create(&names[0].0, Step::csv_header())?, names[0].0.clone());
+        let mut smoothed_csv: Option<(BufWriter<File>, PathBuf)> = names
+            .get(1)
+            .map(|(p, _)| {
+                Ok::<_, anyhow::Error>((create(p, Step::smoothed_csv_header())?, p.clone()))
             })
             .transpose()?;
         let (tx, rx) = sync_channel::<Vec<Step>>(QUEUE);
@@ -83,6 +103,7 @@ impl<'scope> CsvWriter<'scope> {
             chunk: Vec::with_capacity(CHUNK),
             tx: Some(tx),
             handle,
+            names,
         })
     }
 
@@ -106,12 +127,21 @@ impl<'scope> CsvWriter<'scope> {
     }
 
     /// Hands over what is left, waits for the writer, and returns how the
-    /// writing went.
-    pub(super) fn finish(mut self) -> Result<()> {
+    /// writing went. With `complete` (the replay finished) and the writing
+    /// done, gives each file its own name; otherwise leaves them under
+    /// their temporary names.
+    pub(super) fn finish(mut self, complete: bool) -> Result<()> {
         self.send();
         drop(self.tx.take());
         self.handle
             .join()
-            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
+        if complete {
+            for (from, to) in &self.names {
+                std::fs::rename(from, to)
+                    .with_context(|| format!("renaming {} to {}", from.display(), to.display()))?;
+            }
+        }
+        Ok(())
     }
 }

@@ -453,7 +453,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
             }
             writer.push(step);
         });
-        let written = writer.finish();
+        let written = writer.finish(report.is_ok());
         let report = report.with_context(|| format!("replaying {}", log.name))?;
         written?;
         Ok(report)
