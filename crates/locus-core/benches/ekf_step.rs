@@ -8,6 +8,10 @@
 //!   reference;
 //! * `nalgebra_*`  hand-written plain nalgebra (SMatrix ops, `try_inverse` of
 //!   S, plain update), with a hand linearisation (one `sin_cos` per predict);
+//! * `user_plain_*` the minimal user model (`UserDrive`, `UserIr`: the same
+//!   equations written the way the traits' documentation shows first) through
+//!   the Locus API, plain update; `builtin_user_*` the built-in `DiffDrive`
+//!   with that user's measurement model;
 //! * `nalgebra_modelcalls_f64` the same, but evaluating the models through
 //!   the Locus traits (`f`, `jacobian_state`, `process_noise`, `h`,
 //!   `jacobian`, `noise`): separates model-evaluation cost from filter cost;
@@ -55,8 +59,8 @@ use adskalman::{
 use criterion::Criterion;
 use locus_core::nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x2, U2, U3, Vector2, Vector3};
 use locus_core::{
-    Belief, CovarianceUpdate, Ekf, MeasurementModel, MotionModel, Scalar, cast, schedule,
-    wrap_angle,
+    Belief, CovarianceUpdate, Ekf, MeasurementModel, MotionJacobians, MotionModel, Scalar, cast,
+    schedule, wrap_angle,
 };
 use locus_models::{AxisWall, DiffDrive, IrPair, IrPairObservation, WallAxis, WheelTravel};
 
@@ -123,6 +127,94 @@ fn locus_step<T: Scalar>(ekf: &Ekf<T>, inp: &Inputs<T>) -> Belief<T, 3> {
         .predict(&inp.belief, &inp.motion, &inp.u)
         .expect("predict");
     ekf.correct(&prior, &inp.obs, &inp.z)
+        .expect("correct")
+        .belief
+}
+
+// ---------------------------------------------------------------------------
+// a2. The minimal user model: what a user writes first, the way the
+// traits' documentation shows (the required methods only, the dense
+// defaults, no angle wrapping): the same equations as DiffDrive and
+// IrPairObservation.
+
+/// A user's differential drive (paper 001, eq. 11-13).
+#[derive(Debug, Clone, Copy)]
+struct UserDrive<T: Scalar> {
+    wheelbase: T,
+    q11: T,
+    q22: T,
+}
+
+impl<T: Scalar> MotionModel<T, 3, 2> for UserDrive<T> {
+    type Input = WheelTravel<T>;
+
+    fn evaluate(
+        &self,
+        x: &Vector3<T>,
+        u: &WheelTravel<T>,
+        q: &Vector2<T>,
+        jacobians: Option<&mut MotionJacobians<T, 3, 2>>,
+    ) -> Vector3<T> {
+        let half = cast::<T>(0.5);
+        let d = (u.d1 + u.d2) * half + q[0];
+        let dth = (u.d1 - u.d2) / self.wheelbase + q[1];
+        let (s, c) = (x[2] + dth * half).sin_cos();
+        if let Some(j) = jacobians {
+            let (o, z) = (T::one(), T::zero());
+            j.a = Matrix3::new(o, z, -d * s, z, o, d * c, z, z, o);
+            j.w = Matrix3x2::new(c, -d * half * s, s, d * half * c, z, o);
+        }
+        Vector3::new(x[0] + d * c, x[1] + d * s, x[2] + dth)
+    }
+
+    fn noise_cov(&self, _u: &WheelTravel<T>) -> Matrix2<T> {
+        Matrix2::new(self.q11, T::zero(), T::zero(), self.q22)
+    }
+}
+
+/// A user's IR pair against wall x+ (paper 001, eq. 14-17).
+#[derive(Debug, Clone, Copy)]
+struct UserIr<T: Scalar>(IrPairObservation<T>);
+
+impl<T: Scalar> MeasurementModel<T, 3, 2> for UserIr<T> {
+    fn evaluate(&self, x: &Vector3<T>, jacobian: Option<&mut Matrix2x3<T>>) -> Option<Vector2<T>> {
+        if let Some(j) = jacobian {
+            let (o, z) = (T::one(), T::zero());
+            *j = Matrix2x3::new(o, z, z, z, z, o);
+        }
+        Some(Vector2::new(x[0], x[2]))
+    }
+
+    fn noise(&self, _x: &Vector3<T>) -> Matrix2<T> {
+        let v = self.0.v();
+        v * Matrix2::new(self.0.r11, T::zero(), T::zero(), self.0.r22) * v.transpose()
+    }
+}
+
+fn user_drive<T: Scalar>(m: &DiffDrive<T>) -> UserDrive<T> {
+    UserDrive {
+        wheelbase: m.wheelbase,
+        q11: m.q11,
+        q22: m.q22,
+    }
+}
+
+/// The minimal user model through the Locus API.
+fn user_step<T: Scalar>(ekf: &Ekf<T>, inp: &Inputs<T>) -> Belief<T, 3> {
+    let prior = ekf
+        .predict(&inp.belief, &user_drive(&inp.motion), &inp.u)
+        .expect("predict");
+    ekf.correct(&prior, &UserIr(inp.obs), &inp.z)
+        .expect("correct")
+        .belief
+}
+
+/// The built-in DiffDrive with the user's plain measurement model.
+fn builtin_user_step<T: Scalar>(ekf: &Ekf<T>, inp: &Inputs<T>) -> Belief<T, 3> {
+    let prior = ekf
+        .predict(&inp.belief, &inp.motion, &inp.u)
+        .expect("predict");
+    ekf.correct(&prior, &UserIr(inp.obs), &inp.z)
         .expect("correct")
         .belief
 }
@@ -429,6 +521,13 @@ fn check_agreement() {
         tol,
     );
     assert_same("step/nalgebra_f64", &nalgebra_step(&i64_), &reference, tol);
+    assert_same("step/user_f64", &user_step(&plain, &i64_), &reference, tol);
+    assert_same(
+        "step/builtin_user_f64",
+        &builtin_user_step(&plain, &i64_),
+        &reference,
+        tol,
+    );
     assert_same(
         "step/nalgebra_modelcalls_f64",
         &nalgebra_modelcalls_step(&i64_),
@@ -460,6 +559,13 @@ fn check_agreement() {
     assert_same(
         "step/nalgebra_f32",
         &nalgebra_step(&i32_),
+        &reference,
+        tol32,
+    );
+    assert_same("step/user_f32", &user_step(&p32, &i32_), &reference, tol32);
+    assert_same(
+        "step/builtin_user_f32",
+        &builtin_user_step(&p32, &i32_),
         &reference,
         tol32,
     );
@@ -524,6 +630,12 @@ fn bench_step(c: &mut Criterion) {
     g.bench_function("locus_joseph_f64", |b| {
         b.iter(|| locus_step(black_box(&j64), black_box(&i64_)))
     });
+    g.bench_function("user_plain_f64", |b| {
+        b.iter(|| user_step(black_box(&p64), black_box(&i64_)))
+    });
+    g.bench_function("builtin_user_f64", |b| {
+        b.iter(|| builtin_user_step(black_box(&p64), black_box(&i64_)))
+    });
     g.bench_function("nalgebra_modelcalls_f64", |b| {
         b.iter(|| nalgebra_modelcalls_step(black_box(&i64_)))
     });
@@ -542,6 +654,12 @@ fn bench_step(c: &mut Criterion) {
     });
     g.bench_function("locus_joseph_f32", |b| {
         b.iter(|| locus_step(black_box(&j32), black_box(&i32_)))
+    });
+    g.bench_function("user_plain_f32", |b| {
+        b.iter(|| user_step(black_box(&p32), black_box(&i32_)))
+    });
+    g.bench_function("builtin_user_f32", |b| {
+        b.iter(|| builtin_user_step(black_box(&p32), black_box(&i32_)))
     });
     g.finish();
 }
@@ -744,6 +862,8 @@ const STEP_IDS: &[&str] = &[
     "nalgebra_f64",
     "locus_plain_f64",
     "locus_joseph_f64",
+    "user_plain_f64",
+    "builtin_user_f64",
     "nalgebra_modelcalls_f64",
     "adskalman_joseph_f64",
     "adskalman_plain_f64",
@@ -751,6 +871,8 @@ const STEP_IDS: &[&str] = &[
     "nalgebra_f32",
     "locus_plain_f32",
     "locus_joseph_f32",
+    "user_plain_f32",
+    "builtin_user_f32",
 ];
 
 const CORRECT_IDS: &[&str] = &[
@@ -839,6 +961,14 @@ fn step_variants<'a>(
             "locus_joseph_f64",
             batch(i64_, move |i| locus_step(black_box(joseph), i)),
         ),
+        (
+            "user_plain_f64",
+            batch(i64_, move |i| user_step(black_box(plain), i)),
+        ),
+        (
+            "builtin_user_f64",
+            batch(i64_, move |i| builtin_user_step(black_box(plain), i)),
+        ),
         ("closed_f32", batch(i32_, closed_step)),
         ("nalgebra_f32", batch(i32_, nalgebra_step)),
         (
@@ -848,6 +978,14 @@ fn step_variants<'a>(
         (
             "locus_joseph_f32",
             batch(i32_, move |i| locus_step(black_box(joseph32), i)),
+        ),
+        (
+            "user_plain_f32",
+            batch(i32_, move |i| user_step(black_box(plain32), i)),
+        ),
+        (
+            "builtin_user_f32",
+            batch(i32_, move |i| builtin_user_step(black_box(plain32), i)),
         ),
     ]
 }

@@ -190,7 +190,7 @@ impl<T: Scalar> Ekf<T> {
             return Err(diagnose_correct(belief, model, z, mask).unwrap_or(Error::NoMeasurement));
         };
         let p = &belief.p;
-        let (mut pht, mut hph) = model.project(&belief.x, p);
+        let (mut pht, mut hph) = model.project(&belief.x, &lin.h, p);
         for (i, present) in mask.iter().enumerate() {
             if !present {
                 pht.column_mut(i).fill(T::zero());

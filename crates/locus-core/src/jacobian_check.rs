@@ -229,7 +229,7 @@ where
         return Ok(false);
     }
     let h = model.jacobian(x);
-    let (pht, hph) = model.project(x, p);
+    let (pht, hph) = model.project(x, &h, p);
     compare_scaled("project P H^T", &pht, &(p * h.transpose()), tol)?;
     compare_scaled("project H P H^T", &hph, &(h * p * h.transpose()), tol)?;
     Ok(true)

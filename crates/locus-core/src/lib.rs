@@ -21,7 +21,7 @@ pub use consistency::{Consistency, ConsistencyMonitor, Verdict};
 pub use ekf::{Correction, CovarianceUpdate, Ekf, Mask};
 pub use error::{Error, Input};
 pub use gate::ChiSquareGate;
-pub use model::{MeasurementModel, MotionModel};
+pub use model::{MeasurementModel, MotionJacobians, MotionModel};
 pub use pose::Pose;
 pub use robust::{ScaledNoise, StudentT};
 pub use running::{Event, Placement, Recovery, Rules, RunningFilter, Track, Update, nees};

@@ -75,12 +75,12 @@ impl<T: Scalar, const N: usize, const M: usize, Me> MeasurementModel<T, N, M>
 where
     Me: MeasurementModel<T, N, M>,
 {
-    fn h(&self, x: &SVector<T, N>) -> Option<SVector<T, M>> {
-        self.inner.h(x)
-    }
-
-    fn jacobian(&self, x: &SVector<T, N>) -> SMatrix<T, M, N> {
-        self.inner.jacobian(x)
+    fn evaluate(
+        &self,
+        x: &SVector<T, N>,
+        jacobian: Option<&mut SMatrix<T, M, N>>,
+    ) -> Option<SVector<T, M>> {
+        self.inner.evaluate(x, jacobian)
     }
 
     fn noise(&self, x: &SVector<T, N>) -> SMatrix<T, M, M> {
@@ -98,9 +98,10 @@ where
     fn project(
         &self,
         x: &SVector<T, N>,
+        h: &SMatrix<T, M, N>,
         p: &SMatrix<T, N, N>,
     ) -> (SMatrix<T, N, M>, SMatrix<T, M, M>) {
-        self.inner.project(x, p)
+        self.inner.project(x, h, p)
     }
 }
 
@@ -139,11 +140,15 @@ mod track_tests {
     }
 
     impl MeasurementModel<f64, 2, 1> for First {
-        fn h(&self, x: &Vector2<f64>) -> Option<Vector1<f64>> {
+        fn evaluate(
+            &self,
+            x: &Vector2<f64>,
+            jacobian: Option<&mut Matrix1x2<f64>>,
+        ) -> Option<Vector1<f64>> {
+            if let Some(j) = jacobian {
+                *j = Matrix1x2::new(1.0, 0.0);
+            }
             Some(Vector1::new(x[0]))
-        }
-        fn jacobian(&self, _x: &Vector2<f64>) -> Matrix1x2<f64> {
-            Matrix1x2::new(1.0, 0.0)
         }
         fn noise(&self, _x: &Vector2<f64>) -> Matrix1<f64> {
             Matrix1::new(self.r)

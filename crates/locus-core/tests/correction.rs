@@ -29,11 +29,15 @@ struct Linear2 {
 }
 
 impl MeasurementModel<f64, 3, 2> for Linear2 {
-    fn h(&self, x: &SVector<f64, 3>) -> Option<SVector<f64, 2>> {
+    fn evaluate(
+        &self,
+        x: &SVector<f64, 3>,
+        jacobian: Option<&mut SMatrix<f64, 2, 3>>,
+    ) -> Option<SVector<f64, 2>> {
+        if let Some(j) = jacobian {
+            *j = self.h;
+        }
         Some(self.h * x)
-    }
-    fn jacobian(&self, _x: &SVector<f64, 3>) -> SMatrix<f64, 2, 3> {
-        self.h
     }
     fn noise(&self, _x: &SVector<f64, 3>) -> SMatrix<f64, 2, 2> {
         self.r
@@ -47,11 +51,15 @@ struct Linear1 {
 }
 
 impl MeasurementModel<f64, 3, 1> for Linear1 {
-    fn h(&self, x: &SVector<f64, 3>) -> Option<SVector<f64, 1>> {
+    fn evaluate(
+        &self,
+        x: &SVector<f64, 3>,
+        jacobian: Option<&mut SMatrix<f64, 1, 3>>,
+    ) -> Option<SVector<f64, 1>> {
+        if let Some(j) = jacobian {
+            *j = self.h;
+        }
         Some(self.h * x)
-    }
-    fn jacobian(&self, _x: &SVector<f64, 3>) -> SMatrix<f64, 1, 3> {
-        self.h
     }
     fn noise(&self, _x: &SVector<f64, 3>) -> SMatrix<f64, 1, 1> {
         SMatrix::<f64, 1, 1>::new(self.r)

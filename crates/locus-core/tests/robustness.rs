@@ -149,11 +149,15 @@ struct Raw {
 }
 
 impl MeasurementModel<f64, 3, 2> for Raw {
-    fn h(&self, x: &SVector<f64, 3>) -> Option<SVector<f64, 2>> {
+    fn evaluate(
+        &self,
+        x: &SVector<f64, 3>,
+        jacobian: Option<&mut SMatrix<f64, 2, 3>>,
+    ) -> Option<SVector<f64, 2>> {
+        if let Some(j) = jacobian {
+            *j = self.h;
+        }
         self.valid.then(|| self.h * x)
-    }
-    fn jacobian(&self, _x: &SVector<f64, 3>) -> SMatrix<f64, 2, 3> {
-        self.h
     }
     fn noise(&self, _x: &SVector<f64, 3>) -> SMatrix<f64, 2, 2> {
         self.r

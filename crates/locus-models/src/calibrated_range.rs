@@ -40,18 +40,22 @@ fn pose<T: Scalar>(x: &SVector<T, 7>) -> SVector<T, 3> {
 }
 
 impl<T: Scalar> MeasurementModel<T, 7, 1> for CalibratedRange<T> {
-    fn h(&self, x: &SVector<T, 7>) -> Option<SVector<T, 1>> {
-        let z = self.inner.h(&pose(x))?;
-        Some(SVector::<T, 1>::new(z[0]))
-    }
-
-    fn jacobian(&self, x: &SVector<T, 7>) -> SMatrix<T, 1, 7> {
-        let h3 = self.inner.jacobian(&pose(x));
-        let mut h = SMatrix::<T, 1, 7>::zeros();
-        for c in 0..3 {
-            h[(0, c)] = h3[(0, c)];
+    /// The range of [`RangeBearing`], `H` its first row on the pose.
+    fn evaluate(
+        &self,
+        x: &SVector<T, 7>,
+        jacobian: Option<&mut SMatrix<T, 1, 7>>,
+    ) -> Option<SVector<T, 1>> {
+        let mut h3 = SMatrix::<T, 2, 3>::zeros();
+        let want = jacobian.is_some();
+        let z = self.inner.evaluate(&pose(x), want.then_some(&mut h3))?;
+        if let Some(j) = jacobian {
+            *j = SMatrix::<T, 1, 7>::zeros();
+            for c in 0..3 {
+                j[(0, c)] = h3[(0, c)];
+            }
         }
-        h
+        Some(SVector::<T, 1>::new(z[0]))
     }
 
     fn noise(&self, _x: &SVector<T, 7>) -> SMatrix<T, 1, 1> {

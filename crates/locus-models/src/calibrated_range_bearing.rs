@@ -30,24 +30,30 @@ fn pose<T: Scalar>(x: &SVector<T, 7>) -> SVector<T, 3> {
 }
 
 impl<T: Scalar> MeasurementModel<T, 7, 2> for CalibratedRangeBearing<T> {
-    fn h(&self, x: &SVector<T, 7>) -> Option<SVector<T, 2>> {
-        let z = self.inner.h(&pose(x))?;
+    /// [`RangeBearing`] on the pose, the bearing less the sensor's yaw
+    /// plus the bearing bias; `H` its Jacobian on the pose and 1 on the
+    /// bias.
+    fn evaluate(
+        &self,
+        x: &SVector<T, 7>,
+        jacobian: Option<&mut SMatrix<T, 2, 7>>,
+    ) -> Option<SVector<T, 2>> {
+        let mut h3 = SMatrix::<T, 2, 3>::zeros();
+        let want = jacobian.is_some();
+        let z = self.inner.evaluate(&pose(x), want.then_some(&mut h3))?;
+        if let Some(j) = jacobian {
+            *j = SMatrix::<T, 2, 7>::zeros();
+            for r in 0..2 {
+                for c in 0..3 {
+                    j[(r, c)] = h3[(r, c)];
+                }
+            }
+            j[(1, BEARING_BIAS)] = T::one();
+        }
         Some(Vector2::new(
             z[0],
             wrap_angle(z[1] - self.yaw + x[BEARING_BIAS]),
         ))
-    }
-
-    fn jacobian(&self, x: &SVector<T, 7>) -> SMatrix<T, 2, 7> {
-        let h3 = self.inner.jacobian(&pose(x));
-        let mut h = SMatrix::<T, 2, 7>::zeros();
-        for r in 0..2 {
-            for c in 0..3 {
-                h[(r, c)] = h3[(r, c)];
-            }
-        }
-        h[(1, BEARING_BIAS)] = T::one();
-        h
     }
 
     fn noise(&self, x: &SVector<T, 7>) -> SMatrix<T, 2, 2> {

@@ -25,7 +25,7 @@
 //! Robots 22, 2007).
 
 use locus_core::nalgebra::{SMatrix, SVector};
-use locus_core::{MotionModel, Scalar, wrap_angle};
+use locus_core::{MotionJacobians, MotionModel, Scalar, wrap_angle};
 
 use crate::unicycle::{Unicycle, Velocities};
 
@@ -159,9 +159,26 @@ fn pose_model<T: Scalar>() -> Unicycle<T> {
 impl<T: Scalar> MotionModel<T, 7, 6> for CalibratedUnicycle<T> {
     type Input = Velocities<T>;
 
-    fn f(&self, x: &SVector<T, 7>, u: &Velocities<T>, q: &SVector<T, 6>) -> SVector<T, 7> {
+    /// The pose model at the effective velocities, the calibration held
+    /// (plus its walk `q[2..6]`); with `A` and `W` from the pose model's one
+    /// linearisation (one `sinc` and one `sin_cos`): the scales and the bias
+    /// act through the effective velocities.
+    fn evaluate(
+        &self,
+        x: &SVector<T, 7>,
+        u: &Velocities<T>,
+        q: &SVector<T, 6>,
+        jacobians: Option<&mut MotionJacobians<T, 7, 6>>,
+    ) -> SVector<T, 7> {
         let e = self.effective(x, u);
-        let pose = pose_model::<T>().f(&Self::pose(x), &e, &SVector::<T, 2>::new(q[0], q[1]));
+        // `g` = d pose / d(v_e, omega_e), the pose model's noise Jacobian.
+        let mut pose_jacobians = MotionJacobians::<T, 3, 2>::zeros();
+        let pose = pose_model::<T>().evaluate(
+            &Self::pose(x),
+            &e,
+            &SVector::<T, 2>::new(q[0], q[1]),
+            jacobians.is_some().then_some(&mut pose_jacobians),
+        );
         let mut out = *x;
         out[0] = pose[0];
         out[1] = pose[1];
@@ -170,15 +187,25 @@ impl<T: Scalar> MotionModel<T, 7, 6> for CalibratedUnicycle<T> {
             out[V_SCALE + i] += q[2 + i];
         }
         out[BEARING_BIAS] = wrap_angle(out[BEARING_BIAS]);
+        if let Some(j) = jacobians {
+            let (a3, g) = (pose_jacobians.a, pose_jacobians.w);
+            j.a = SMatrix::<T, 7, 7>::identity();
+            j.w = SMatrix::<T, 7, 6>::zeros();
+            for r in 0..3 {
+                for c in 0..3 {
+                    j.a[(r, c)] = a3[(r, c)];
+                }
+                j.a[(r, V_SCALE)] = g[(r, 0)] * u.v;
+                j.a[(r, OMEGA_SCALE)] = g[(r, 1)] * u.omega;
+                j.a[(r, OMEGA_BIAS)] = g[(r, 1)];
+                j.w[(r, 0)] = g[(r, 0)];
+                j.w[(r, 1)] = g[(r, 1)];
+            }
+            for i in 0..4 {
+                j.w[(V_SCALE + i, 2 + i)] = T::one();
+            }
+        }
         out
-    }
-
-    fn jacobian_state(&self, x: &SVector<T, 7>, u: &Velocities<T>) -> SMatrix<T, 7, 7> {
-        self.linearize(x, u).1
-    }
-
-    fn jacobian_noise(&self, x: &SVector<T, 7>, u: &Velocities<T>) -> SMatrix<T, 7, 6> {
-        self.linearize(x, u).2
     }
 
     fn noise_cov(&self, u: &Velocities<T>) -> SMatrix<T, 6, 6> {
@@ -189,41 +216,6 @@ impl<T: Scalar> MotionModel<T, 7, 6> for CalibratedUnicycle<T> {
             q[(2 + i, 2 + i)] = self.walk[i] * u.dt;
         }
         q
-    }
-
-    /// `f`, `A` and `W` from one linearisation of the pose model (one
-    /// `sinc` and one `sin_cos`).
-    #[inline]
-    fn linearize(
-        &self,
-        x: &SVector<T, 7>,
-        u: &Velocities<T>,
-    ) -> (SVector<T, 7>, SMatrix<T, 7, 7>, SMatrix<T, 7, 6>) {
-        let e = self.effective(x, u);
-        // `g` = d pose / d(v_e, omega_e), the pose model's noise Jacobian:
-        // the scales and the bias act through the effective velocities.
-        let (pose, a3, g) = pose_model::<T>().linearize(&Self::pose(x), &e);
-        let mut f = *x;
-        f[0] = pose[0];
-        f[1] = pose[1];
-        f[2] = pose[2];
-        f[BEARING_BIAS] = wrap_angle(f[BEARING_BIAS]);
-        let mut a = SMatrix::<T, 7, 7>::identity();
-        let mut w = SMatrix::<T, 7, 6>::zeros();
-        for r in 0..3 {
-            for c in 0..3 {
-                a[(r, c)] = a3[(r, c)];
-            }
-            a[(r, V_SCALE)] = g[(r, 0)] * u.v;
-            a[(r, OMEGA_SCALE)] = g[(r, 1)] * u.omega;
-            a[(r, OMEGA_BIAS)] = g[(r, 1)];
-            w[(r, 0)] = g[(r, 0)];
-            w[(r, 1)] = g[(r, 1)];
-        }
-        for i in 0..4 {
-            w[(V_SCALE + i, 2 + i)] = T::one();
-        }
-        (f, a, w)
     }
 
     fn input_is_finite(&self, u: &Velocities<T>) -> bool {

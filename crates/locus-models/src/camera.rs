@@ -66,7 +66,7 @@
 //! continuous-time density, discretised exactly over a step `dt`.
 
 use locus_core::nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3};
-use locus_core::{MeasurementModel, MotionModel, Scalar, cast, wrap_angle};
+use locus_core::{MeasurementModel, MotionJacobians, MotionModel, Scalar, cast, wrap_angle};
 
 /// Default minimum depth `z_c` (m) of every mark for a measurement to exist:
 /// the spec's divergence rule ("a mark comes within 0.05 m of the camera
@@ -347,31 +347,18 @@ impl<T: Scalar> CameraMarks4<T> {
 
 impl<T: Scalar, const M: usize, const D: usize> MeasurementModel<T, 6, D> for CameraMarks<T, M, D> {
     /// `[u_1, v_1, ..., u_M, v_M]` (px), eq. 5-10; `None` if any mark has
-    /// `z_c <= min_depth` (or a non-finite depth).
-    fn h(&self, x: &SVector<T, 6>) -> Option<SVector<T, D>> {
-        let () = Self::DIMENSION_IS_TWICE_THE_MARKS;
-        let mut y = SVector::<T, D>::zeros();
-        for (j, xc) in self.marks_in_camera(x).iter().enumerate() {
-            // A non-finite depth (NaN) is no measurement either.
-            if !xc[2].is_finite() || xc[2] <= self.min_depth {
-                return None;
-            }
-            let p = self.intrinsics.project(xc);
-            y[2 * j] = p[0];
-            y[2 * j + 1] = p[1];
-        }
-        Some(y)
-    }
-
-    /// `C = dh/dx` (`D x 6`, px/m and px/rad), eq. 18 per mark with the
-    /// spec's fixed `dR/dtheta`, rows `2j, 2j + 1` for mark `j`.
-    /// `h` and `C` with one rotation (shared by both).
-    fn linearize(&self, x: &SVector<T, 6>) -> Option<(SVector<T, D>, SMatrix<T, D, 6>)> {
+    /// `z_c <= min_depth` (or a non-finite depth). `C = dh/dx` (`D x 6`,
+    /// px/m and px/rad), eq. 18 per mark with the spec's fixed
+    /// `dR/dtheta`, rows `2j, 2j + 1` for mark `j`; one rotation for both.
+    fn evaluate(
+        &self,
+        x: &SVector<T, 6>,
+        mut jacobian: Option<&mut SMatrix<T, D, 6>>,
+    ) -> Option<SVector<T, D>> {
         let () = Self::DIMENSION_IS_TWICE_THE_MARKS;
         let rot = EulerRotation::from_state(x);
         let t = Vector3::new(x[0], x[1], x[2]);
         let mut y = SVector::<T, D>::zeros();
-        let mut c = SMatrix::<T, D, 6>::zeros();
         for (j, xo) in self.marks.iter().enumerate() {
             let rxo = rot.r * xo;
             let xc = t + rxo;
@@ -382,33 +369,19 @@ impl<T: Scalar, const M: usize, const D: usize> MeasurementModel<T, 6, D> for Ca
             let p = self.intrinsics.project(&xc);
             y[2 * j] = p[0];
             y[2 * j + 1] = p[1];
-            let jp = self.intrinsics.project_jacobian(&xc);
-            let mut block = c.fixed_view_mut::<2, 6>(2 * j, 0);
-            block.fixed_view_mut::<2, 3>(0, 0).copy_from(&jp);
-            block.set_column(3, &(jp * rot.d_phi(xo)));
-            block.set_column(4, &(jp * rot.d_theta(xo)));
-            block.set_column(5, &(jp * Vector3::new(-rxo[1], rxo[0], T::zero())));
+            if let Some(c) = jacobian.as_deref_mut() {
+                let jp = self.intrinsics.project_jacobian(&xc);
+                // jp * [I3 | dR/dphi X_O | dR/dtheta X_O | dR/dpsi X_O], by
+                // blocks.
+                let mut block = c.fixed_view_mut::<2, 6>(2 * j, 0);
+                block.fixed_view_mut::<2, 3>(0, 0).copy_from(&jp);
+                block.set_column(3, &(jp * rot.d_phi(xo)));
+                block.set_column(4, &(jp * rot.d_theta(xo)));
+                // dR/dpsi X_O = e3 x (R X_O), reusing R X_O.
+                block.set_column(5, &(jp * Vector3::new(-rxo[1], rxo[0], T::zero())));
+            }
         }
-        Some((y, c))
-    }
-
-    fn jacobian(&self, x: &SVector<T, 6>) -> SMatrix<T, D, 6> {
-        let () = Self::DIMENSION_IS_TWICE_THE_MARKS;
-        let rot = EulerRotation::from_state(x);
-        let t = Vector3::new(x[0], x[1], x[2]);
-        let mut c = SMatrix::<T, D, 6>::zeros();
-        for (j, xo) in self.marks.iter().enumerate() {
-            let rxo = rot.r * xo;
-            let jp = self.intrinsics.project_jacobian(&(t + rxo));
-            // jp * [I3 | dR/dphi X_O | dR/dtheta X_O | dR/dpsi X_O], by blocks.
-            let mut block = c.fixed_view_mut::<2, 6>(2 * j, 0);
-            block.fixed_view_mut::<2, 3>(0, 0).copy_from(&jp);
-            block.set_column(3, &(jp * rot.d_phi(xo)));
-            block.set_column(4, &(jp * rot.d_theta(xo)));
-            // dR/dpsi X_O = e3 x (R X_O), reusing R X_O.
-            block.set_column(5, &(jp * Vector3::new(-rxo[1], rxo[0], T::zero())));
-        }
-        c
+        Some(y)
     }
 
     /// `Theta = pixel_var I_D` (px^2).
@@ -466,20 +439,23 @@ impl<T: Scalar> MotionModel<T, 6, 6> for RandomWalk6<T> {
     /// The step `dt` (s, finite, >= 0).
     type Input = T;
 
-    fn f(&self, x: &SVector<T, 6>, _dt: &T, q: &SVector<T, 6>) -> SVector<T, 6> {
+    /// `x + q`, angles wrapped; `A = W = I6`.
+    fn evaluate(
+        &self,
+        x: &SVector<T, 6>,
+        _dt: &T,
+        q: &SVector<T, 6>,
+        jacobians: Option<&mut MotionJacobians<T, 6, 6>>,
+    ) -> SVector<T, 6> {
+        if let Some(j) = jacobians {
+            j.a = SMatrix::identity();
+            j.w = SMatrix::identity();
+        }
         let mut y = x + q;
         for i in 3..6 {
             y[i] = wrap_angle(y[i]);
         }
         y
-    }
-
-    fn jacobian_state(&self, _x: &SVector<T, 6>, _dt: &T) -> SMatrix<T, 6, 6> {
-        SMatrix::identity()
-    }
-
-    fn jacobian_noise(&self, _x: &SVector<T, 6>, _dt: &T) -> SMatrix<T, 6, 6> {
-        SMatrix::identity()
     }
 
     /// `Q_d = Q dt` (m^2, rad^2).

@@ -20,7 +20,7 @@
 //! Valid everywhere.
 
 use locus_core::nalgebra::{Matrix2, SMatrix, SVector, Vector3};
-use locus_core::{MotionModel, Scalar, cast, wrap_angle};
+use locus_core::{MotionJacobians, MotionModel, Scalar, cast, wrap_angle};
 
 /// Distances travelled by the two wheels in one step (m). Wheel 1 is the
 /// right wheel: a positive turn rate makes it travel further.
@@ -75,45 +75,26 @@ impl<T: Scalar> DiffDrive<T> {
 impl<T: Scalar> MotionModel<T, 3, 2> for DiffDrive<T> {
     type Input = WheelTravel<T>;
 
-    fn f(&self, x: &SVector<T, 3>, u: &WheelTravel<T>, q: &SVector<T, 2>) -> SVector<T, 3> {
-        let (d, dth) = self.increments(u);
-        let d = d + q[0];
-        let dth = dth + q[1];
-        let mid = x[2] + dth * cast::<T>(0.5);
-        let (s, c) = mid.sin_cos();
-        Vector3::new(x[0] + d * c, x[1] + d * s, wrap_angle(x[2] + dth))
-    }
-
-    fn jacobian_state(&self, x: &SVector<T, 3>, u: &WheelTravel<T>) -> SMatrix<T, 3, 3> {
-        let (d, dth) = self.increments(u);
-        let (s, c) = (x[2] + dth * cast::<T>(0.5)).sin_cos();
-        let (o, z) = (T::one(), T::zero());
-        SMatrix::<T, 3, 3>::new(o, z, -d * s, z, o, d * c, z, z, o)
-    }
-
-    fn jacobian_noise(&self, x: &SVector<T, 3>, u: &WheelTravel<T>) -> SMatrix<T, 3, 2> {
-        let (d, dth) = self.increments(u);
-        let half = cast::<T>(0.5);
-        let (s, c) = (x[2] + dth * half).sin_cos();
-        SMatrix::<T, 3, 2>::new(c, -d * half * s, s, d * half * c, T::zero(), T::one())
-    }
-
-    /// One `sin_cos` for `f`, `A` and `W`.
-    #[inline]
-    fn linearize(
+    /// Eq. 11-13, with `A = df/dX` and `W = df/dq` beside it (one
+    /// `sin_cos`).
+    fn evaluate(
         &self,
         x: &SVector<T, 3>,
         u: &WheelTravel<T>,
-    ) -> (SVector<T, 3>, SMatrix<T, 3, 3>, SMatrix<T, 3, 2>) {
+        q: &SVector<T, 2>,
+        jacobians: Option<&mut MotionJacobians<T, 3, 2>>,
+    ) -> SVector<T, 3> {
         let (d, dth) = self.increments(u);
+        let d = d + q[0];
+        let dth = dth + q[1];
         let half = cast::<T>(0.5);
         let (s, c) = (x[2] + dth * half).sin_cos();
-        let (o, z) = (T::one(), T::zero());
-        (
-            Vector3::new(x[0] + d * c, x[1] + d * s, wrap_angle(x[2] + dth)),
-            SMatrix::<T, 3, 3>::new(o, z, -d * s, z, o, d * c, z, z, o),
-            SMatrix::<T, 3, 2>::new(c, -d * half * s, s, d * half * c, z, o),
-        )
+        if let Some(j) = jacobians {
+            let (o, z) = (T::one(), T::zero());
+            j.a = SMatrix::<T, 3, 3>::new(o, z, -d * s, z, o, d * c, z, z, o);
+            j.w = SMatrix::<T, 3, 2>::new(c, -d * half * s, s, d * half * c, z, o);
+        }
+        Vector3::new(x[0] + d * c, x[1] + d * s, wrap_angle(x[2] + dth))
     }
 
     /// `P- = A P A^T + W Q W^T` in closed form (eq. 11-13): with

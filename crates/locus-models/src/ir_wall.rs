@@ -226,20 +226,22 @@ pub fn observe<T: Scalar>(pair: &IrPair<T>, wall: &AxisWall<T>, ds1: T, ds2: T) 
 }
 
 impl<T: Scalar> MeasurementModel<T, 3, 2> for IrPairObservation<T> {
-    fn h(&self, x: &SVector<T, 3>) -> Option<SVector<T, 2>> {
-        let pos = match self.wall.axis {
-            WallAxis::X => x[0],
-            WallAxis::Y => x[1],
-        };
-        Some(Vector2::new(pos, x[2]))
-    }
-
-    fn jacobian(&self, _x: &SVector<T, 3>) -> SMatrix<T, 2, 3> {
+    /// Eq. 14-17: the distance along the wall's axis and the heading; `H`
+    /// selects them.
+    fn evaluate(
+        &self,
+        x: &SVector<T, 3>,
+        jacobian: Option<&mut SMatrix<T, 2, 3>>,
+    ) -> Option<SVector<T, 2>> {
         let (o, z) = (T::one(), T::zero());
-        match self.wall.axis {
-            WallAxis::X => SMatrix::<T, 2, 3>::new(o, z, z, z, z, o),
-            WallAxis::Y => SMatrix::<T, 2, 3>::new(z, o, z, z, z, o),
+        let (pos, h) = match self.wall.axis {
+            WallAxis::X => (x[0], SMatrix::<T, 2, 3>::new(o, z, z, z, z, o)),
+            WallAxis::Y => (x[1], SMatrix::<T, 2, 3>::new(z, o, z, z, z, o)),
+        };
+        if let Some(j) = jacobian {
+            *j = h;
         }
+        Some(Vector2::new(pos, x[2]))
     }
 
     /// `V R V^T` for the diagonal `R`, expanded (exactly symmetric).
@@ -264,6 +266,7 @@ impl<T: Scalar> MeasurementModel<T, 3, 2> for IrPairObservation<T> {
     fn project(
         &self,
         _x: &SVector<T, 3>,
+        _h: &SMatrix<T, 2, 3>,
         p: &SMatrix<T, 3, 3>,
     ) -> (SMatrix<T, 3, 2>, SMatrix<T, 2, 2>) {
         // One arm per axis, so every index is a constant and P can stay in

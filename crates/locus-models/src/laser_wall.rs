@@ -424,15 +424,19 @@ impl<T: Scalar> LaserWallPaper<T> {
 impl<T: Scalar> MeasurementModel<T, 3, 2> for LaserWallPaper<T> {
     /// `h(X)` of eq. 14 with `(l, m)` the hit at `X`; `None` if the beam is
     /// parallel to the wall, the wall is behind the sensor or out of range.
-    fn h(&self, x: &SVector<T, 3>) -> Option<SVector<T, 2>> {
-        self.hit(x).map(|hit| self.h_at_point(x, &hit.point))
-    }
-
-    /// `H` of eq. 15 with `(l, m)` computed at `x` and held fixed (the paper's
-    /// approximation; not the derivative of `h`). Zero where `h` is `None`.
-    fn jacobian(&self, x: &SVector<T, 3>) -> SMatrix<T, 2, 3> {
-        self.hit(x)
-            .map_or_else(SMatrix::zeros, |hit| self.jacobian_at_point(x, &hit.point))
+    /// `H` of eq. 15 with `(l, m)` computed at `x` and held fixed (the
+    /// paper's approximation; not the derivative of `h`); one ray cast for
+    /// both.
+    fn evaluate(
+        &self,
+        x: &SVector<T, 3>,
+        jacobian: Option<&mut SMatrix<T, 2, 3>>,
+    ) -> Option<SVector<T, 2>> {
+        let hit = self.hit(x)?;
+        if let Some(j) = jacobian {
+            *j = self.jacobian_at_point(x, &hit.point);
+        }
+        Some(self.h_at_point(x, &hit.point))
     }
 
     /// `R = diag(s_u^2, s_v^2)` (m^2).
@@ -484,15 +488,18 @@ impl<'a, T: Scalar> LaserRange<'a, T> {
 }
 
 impl<T: Scalar> MeasurementModel<T, 3, 1> for LaserRange<'_, T> {
-    /// `[gamma(X)]` (m), or `None` if the beam hits no segment.
-    fn h(&self, x: &SVector<T, 3>) -> Option<SVector<T, 1>> {
-        self.range(x).map(Vector1::new)
-    }
-
-    /// `d gamma / dX` at the nearest hit (exact). Zero where `h` is `None`.
-    fn jacobian(&self, x: &SVector<T, 3>) -> SMatrix<T, 1, 3> {
-        self.cast(x)
-            .map_or_else(SMatrix::zeros, |r| range_jacobian(&self.mount, x, &r.hit))
+    /// `[gamma(X)]` (m), or `None` if the beam hits no segment; `d gamma /
+    /// dX` at the nearest hit (exact), from the same ray cast.
+    fn evaluate(
+        &self,
+        x: &SVector<T, 3>,
+        jacobian: Option<&mut SMatrix<T, 1, 3>>,
+    ) -> Option<SVector<T, 1>> {
+        let r = self.cast(x)?;
+        if let Some(j) = jacobian {
+            *j = range_jacobian(&self.mount, x, &r.hit);
+        }
+        Some(Vector1::new(r.hit.range))
     }
 
     /// `R = s_gamma^2` (m^2).

@@ -91,45 +91,36 @@ impl<T: Scalar> RangeBearing<T> {
             Vector2::new(-sx * s - sy * c, sx * c - sy * s),
         )
     }
+}
 
-    /// `(dx, dy, r)`: the landmark's offset from the sensor (m) and its
-    /// length, or `None` within `min_range` (or non-finite).
-    #[inline]
-    fn offset(&self, x: &SVector<T, 3>) -> Option<(T, T, T)> {
-        let (p, _) = self.sensor_world(x);
+impl<T: Scalar> MeasurementModel<T, 3, 2> for RangeBearing<T> {
+    /// Range and bearing from the mounted sensor, `H` beside them (one
+    /// `sin_cos`, one `atan2`, one `sqrt`).
+    fn evaluate(
+        &self,
+        x: &SVector<T, 3>,
+        jacobian: Option<&mut SMatrix<T, 2, 3>>,
+    ) -> Option<SVector<T, 2>> {
+        let (p, pt) = self.sensor_world(x);
         let dx = self.landmark[0] - p[0];
         let dy = self.landmark[1] - p[1];
         let r = (dx * dx + dy * dy).sqrt();
         // Positive test so that NaN gives None.
-        if r > self.min_range && r.is_finite() {
-            Some((dx, dy, r))
-        } else {
-            None
+        if !(r > self.min_range && r.is_finite()) {
+            return None;
         }
-    }
-}
-
-impl<T: Scalar> MeasurementModel<T, 3, 2> for RangeBearing<T> {
-    fn h(&self, x: &SVector<T, 3>) -> Option<SVector<T, 2>> {
-        let (dx, dy, r) = self.offset(x)?;
+        if let Some(j) = jacobian {
+            let r2 = r * r;
+            *j = SMatrix::<T, 2, 3>::new(
+                -dx / r,
+                -dy / r,
+                -(dx * pt[0] + dy * pt[1]) / r,
+                dy / r2,
+                -dx / r2,
+                (dy * pt[0] - dx * pt[1]) / r2 - T::one(),
+            );
+        }
         Some(Vector2::new(r, wrap_angle(dy.atan2(dx) - x[2])))
-    }
-
-    fn jacobian(&self, x: &SVector<T, 3>) -> SMatrix<T, 2, 3> {
-        let (_, pt) = self.sensor_world(x);
-        let Some((dx, dy, r)) = self.offset(x) else {
-            // Outside the valid domain (not called by the filter there).
-            return SMatrix::<T, 2, 3>::from_element(cast::<T>(f64::NAN));
-        };
-        let r2 = r * r;
-        SMatrix::<T, 2, 3>::new(
-            -dx / r,
-            -dy / r,
-            -(dx * pt[0] + dy * pt[1]) / r,
-            dy / r2,
-            -dx / r2,
-            (dy * pt[0] - dx * pt[1]) / r2 - T::one(),
-        )
     }
 
     fn noise(&self, _x: &SVector<T, 3>) -> SMatrix<T, 2, 2> {

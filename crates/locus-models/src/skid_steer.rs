@@ -38,7 +38,7 @@
 //! Valid everywhere for `D > 0`; `dT >= 0` is expected but not required.
 
 use locus_core::nalgebra::{Matrix2, SMatrix, SVector, Vector3};
-use locus_core::{MotionModel, Scalar, cast, wrap_angle};
+use locus_core::{MotionJacobians, MotionModel, Scalar, cast, wrap_angle};
 
 /// The \[assumed\] effective track width `D` of the paper's Pioneer 3-AT (m).
 /// The paper does not give it; for a skid-steer robot it is larger than the
@@ -106,29 +106,29 @@ impl<T: Scalar> SkidSteer<T> {
 impl<T: Scalar> MotionModel<T, 3, 2> for SkidSteer<T> {
     type Input = TreadSpeeds<T>;
 
-    fn f(&self, x: &SVector<T, 3>, u: &TreadSpeeds<T>, q: &SVector<T, 2>) -> SVector<T, 3> {
+    fn evaluate(
+        &self,
+        x: &SVector<T, 3>,
+        u: &TreadSpeeds<T>,
+        q: &SVector<T, 2>,
+        jacobians: Option<&mut MotionJacobians<T, 3, 2>>,
+    ) -> SVector<T, 3> {
         let noisy = TreadSpeeds::new(u.v_l + q[0], u.v_r + q[1], u.dt);
         let (v, omega) = self.speeds(&noisy);
         let (s, c) = x[2].sin_cos();
+        if let Some(j) = jacobians {
+            let (o, z) = (T::one(), T::zero());
+            j.a = SMatrix::<T, 3, 3>::new(o, z, -u.dt * v * s, z, o, u.dt * v * c, z, z, o);
+            let half_dt = u.dt * cast::<T>(0.5);
+            let k = u.dt / self.track_width;
+            j.w =
+                SMatrix::<T, 3, 2>::new(half_dt * c, half_dt * c, half_dt * s, half_dt * s, -k, k);
+        }
         Vector3::new(
             x[0] + u.dt * v * c,
             x[1] + u.dt * v * s,
             wrap_angle(x[2] + u.dt * omega),
         )
-    }
-
-    fn jacobian_state(&self, x: &SVector<T, 3>, u: &TreadSpeeds<T>) -> SMatrix<T, 3, 3> {
-        let (v, _) = self.speeds(u);
-        let (s, c) = x[2].sin_cos();
-        let (o, z) = (T::one(), T::zero());
-        SMatrix::<T, 3, 3>::new(o, z, -u.dt * v * s, z, o, u.dt * v * c, z, z, o)
-    }
-
-    fn jacobian_noise(&self, x: &SVector<T, 3>, u: &TreadSpeeds<T>) -> SMatrix<T, 3, 2> {
-        let half_dt = u.dt * cast::<T>(0.5);
-        let (s, c) = x[2].sin_cos();
-        let k = u.dt / self.track_width;
-        SMatrix::<T, 3, 2>::new(half_dt * c, half_dt * c, half_dt * s, half_dt * s, -k, k)
     }
 
     fn noise_cov(&self, _u: &TreadSpeeds<T>) -> SMatrix<T, 2, 2> {

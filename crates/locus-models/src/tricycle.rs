@@ -51,7 +51,7 @@
 //! All models are valid for any state and any finite input.
 
 use locus_core::nalgebra::{Matrix2, SMatrix, SVector, Vector3};
-use locus_core::{MotionModel, Scalar, cast, wrap_angle};
+use locus_core::{MotionJacobians, MotionModel, Scalar, cast, wrap_angle};
 
 /// Counts per wheel revolution with x4 quadrature decoding: `4 x lines x G`,
 /// where `lines` is the encoder's lines per encoder-shaft revolution and `G`
@@ -133,19 +133,25 @@ impl<T: Scalar> FrontReading<T> {
     }
 }
 
-/// The Euler step shared by both models: `(x + ds cos th, y + ds sin th, th + dth)`.
+/// The Euler step shared by both models, `(x + ds cos th, y + ds sin th,
+/// th + dth)`, with `A = df/dX` written into `a` when given; returns the
+/// step and `(sin th, cos th)` for the noise Jacobian.
 #[inline]
-fn euler_step<T: Scalar>(x: &SVector<T, 3>, ds: T, dth: T) -> SVector<T, 3> {
+fn euler_step<T: Scalar>(
+    x: &SVector<T, 3>,
+    ds: T,
+    dth: T,
+    a: Option<&mut SMatrix<T, 3, 3>>,
+) -> (SVector<T, 3>, (T, T)) {
     let (s, c) = x[2].sin_cos();
-    Vector3::new(x[0] + ds * c, x[1] + ds * s, wrap_angle(x[2] + dth))
-}
-
-/// `A = df/dX` of the Euler step.
-#[inline]
-fn euler_jacobian<T: Scalar>(x: &SVector<T, 3>, ds: T) -> SMatrix<T, 3, 3> {
-    let (s, c) = x[2].sin_cos();
-    let (o, z) = (T::one(), T::zero());
-    SMatrix::<T, 3, 3>::new(o, z, -ds * s, z, o, ds * c, z, z, o)
+    if let Some(a) = a {
+        let (o, z) = (T::one(), T::zero());
+        *a = SMatrix::<T, 3, 3>::new(o, z, -ds * s, z, o, ds * c, z, z, o);
+    }
+    (
+        Vector3::new(x[0] + ds * c, x[1] + ds * s, wrap_angle(x[2] + dth)),
+        (s, c),
+    )
 }
 
 #[inline]
@@ -219,24 +225,26 @@ impl<T: Scalar> TricycleRear<T> {
 impl<T: Scalar> MotionModel<T, 3, 2> for TricycleRear<T> {
     type Input = RearCounts<T>;
 
-    fn f(&self, x: &SVector<T, 3>, u: &RearCounts<T>, q: &SVector<T, 2>) -> SVector<T, 3> {
+    fn evaluate(
+        &self,
+        x: &SVector<T, 3>,
+        u: &RearCounts<T>,
+        q: &SVector<T, 2>,
+        jacobians: Option<&mut MotionJacobians<T, 3, 2>>,
+    ) -> SVector<T, 3> {
         let noisy = RearCounts {
             n_l: u.n_l + q[0],
             n_r: u.n_r + q[1],
         };
         let (ds, dth) = self.increments(&noisy);
-        euler_step(x, ds, dth)
-    }
-
-    fn jacobian_state(&self, x: &SVector<T, 3>, u: &RearCounts<T>) -> SMatrix<T, 3, 3> {
-        euler_jacobian(x, self.increments(u).0)
-    }
-
-    fn jacobian_noise(&self, x: &SVector<T, 3>, _u: &RearCounts<T>) -> SMatrix<T, 3, 2> {
+        let Some(j) = jacobians else {
+            return euler_step(x, ds, dth, None).0;
+        };
+        let (next, (s, c)) = euler_step(x, ds, dth, Some(&mut j.a));
         let k = self.k();
-        let (s, c) = x[2].sin_cos();
         let kd = (k + k) / self.track;
-        SMatrix::<T, 3, 2>::new(k * c, k * c, k * s, k * s, -kd, kd)
+        j.w = SMatrix::<T, 3, 2>::new(k * c, k * c, k * s, k * s, -kd, kd);
+        next
     }
 
     fn noise_cov(&self, u: &RearCounts<T>) -> SMatrix<T, 2, 2> {
@@ -376,29 +384,31 @@ impl<T: Scalar> TricycleFront<T> {
 impl<T: Scalar> MotionModel<T, 3, 2> for TricycleFront<T> {
     type Input = FrontReading<T>;
 
-    fn f(&self, x: &SVector<T, 3>, u: &FrontReading<T>, q: &SVector<T, 2>) -> SVector<T, 3> {
+    fn evaluate(
+        &self,
+        x: &SVector<T, 3>,
+        u: &FrontReading<T>,
+        q: &SVector<T, 2>,
+        jacobians: Option<&mut MotionJacobians<T, 3, 2>>,
+    ) -> SVector<T, 3> {
         let (ds, dth) = self.increments_noisy(u, q[0], q[1]);
-        euler_step(x, ds, dth)
-    }
-
-    fn jacobian_state(&self, x: &SVector<T, 3>, u: &FrontReading<T>) -> SMatrix<T, 3, 3> {
-        euler_jacobian(x, self.increments(u).0)
-    }
-
-    fn jacobian_noise(&self, x: &SVector<T, 3>, u: &FrontReading<T>) -> SMatrix<T, 3, 2> {
+        let Some(j) = jacobians else {
+            return euler_step(x, ds, dth, None).0;
+        };
+        let (next, (st, ct)) = euler_step(x, ds, dth, Some(&mut j.a));
         let k = self.k();
-        let ds_f = k * u.n_f;
-        let (sp, cp) = self.clamped_steering(u.phi).sin_cos();
-        let (st, ct) = x[2].sin_cos();
+        let ds_f = k * (u.n_f + q[0]);
+        let (sp, cp) = (self.clamped_steering(u.phi) + q[1]).sin_cos();
         let l = self.wheelbase;
-        SMatrix::<T, 3, 2>::new(
+        j.w = SMatrix::<T, 3, 2>::new(
             k * cp * ct,
             -ds_f * sp * ct,
             k * cp * st,
             -ds_f * sp * st,
             k * sp / l,
             ds_f * cp / l,
-        )
+        );
+        next
     }
 
     fn noise_cov(&self, u: &FrontReading<T>) -> SMatrix<T, 2, 2> {

@@ -41,7 +41,7 @@
 //! Valid for any state and any finite input; `dt < 0` integrates backwards.
 
 use locus_core::nalgebra::{Matrix2, SMatrix, SVector, Vector3};
-use locus_core::{MotionModel, Scalar, cast, wrap_angle};
+use locus_core::{MotionJacobians, MotionModel, Scalar, cast, wrap_angle};
 
 /// Commanded velocities held over one step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -130,76 +130,36 @@ impl<T: Scalar> Unicycle<T> {
 impl<T: Scalar> MotionModel<T, 3, 2> for Unicycle<T> {
     type Input = Velocities<T>;
 
-    fn f(&self, x: &SVector<T, 3>, u: &Velocities<T>, q: &SVector<T, 2>) -> SVector<T, 3> {
-        let noisy = Velocities {
-            v: u.v + q[0],
-            omega: u.omega + q[1],
-            dt: u.dt,
-        };
-        let (d, a) = self.chord(x[2], &noisy);
-        let (s, c) = a.sin_cos();
-        Vector3::new(
-            x[0] + d * c,
-            x[1] + d * s,
-            wrap_angle(x[2] + noisy.omega * u.dt),
-        )
-    }
-
-    /// `f`, `A` and `W` together: one `sinc` and one `sin_cos` for the
-    /// three (each alone evaluates its own).
-    #[inline]
-    fn linearize(
+    /// The exact arc with `A` and `W` beside it: one `sinc` and one
+    /// `sin_cos`.
+    fn evaluate(
         &self,
         x: &SVector<T, 3>,
         u: &Velocities<T>,
-    ) -> (SVector<T, 3>, SMatrix<T, 3, 3>, SMatrix<T, 3, 2>) {
+        q: &SVector<T, 2>,
+        jacobians: Option<&mut MotionJacobians<T, 3, 2>>,
+    ) -> SVector<T, 3> {
+        let (v, omega) = (u.v + q[0], u.omega + q[1]);
         let half_dt = u.dt * cast::<T>(0.5);
-        let h = u.omega * half_dt;
+        let h = omega * half_dt;
         let (sc, dsc) = sinc_and_derivative(h);
-        let d = u.v * u.dt * sc;
+        let d = v * u.dt * sc;
         let (s, c) = (x[2] + h).sin_cos();
-        let (o, z) = (T::one(), T::zero());
-        let f = Vector3::new(
-            x[0] + d * c,
-            x[1] + d * s,
-            wrap_angle(x[2] + u.omega * u.dt),
-        );
-        let a = SMatrix::<T, 3, 3>::new(o, z, -d * s, z, o, d * c, z, z, o);
-        let dd_dw = u.v * u.dt * dsc * half_dt;
-        let w = SMatrix::<T, 3, 2>::new(
-            u.dt * sc * c,
-            dd_dw * c - d * half_dt * s,
-            u.dt * sc * s,
-            dd_dw * s + d * half_dt * c,
-            z,
-            u.dt,
-        );
-        (f, a, w)
-    }
-
-    fn jacobian_state(&self, x: &SVector<T, 3>, u: &Velocities<T>) -> SMatrix<T, 3, 3> {
-        let (d, a) = self.chord(x[2], u);
-        let (s, c) = a.sin_cos();
-        let (o, z) = (T::one(), T::zero());
-        SMatrix::<T, 3, 3>::new(o, z, -d * s, z, o, d * c, z, z, o)
-    }
-
-    fn jacobian_noise(&self, x: &SVector<T, 3>, u: &Velocities<T>) -> SMatrix<T, 3, 2> {
-        let half_dt = u.dt * cast::<T>(0.5);
-        let h = u.omega * half_dt;
-        let (sc, dsc) = sinc_and_derivative(h);
-        let d = u.v * u.dt * sc;
-        let (s, c) = (x[2] + h).sin_cos();
-        // d(d)/d(omega) = v dt sinc'(h) dt/2;  d(a)/d(omega) = dt/2.
-        let dd_dw = u.v * u.dt * dsc * half_dt;
-        SMatrix::<T, 3, 2>::new(
-            u.dt * sc * c,
-            dd_dw * c - d * half_dt * s,
-            u.dt * sc * s,
-            dd_dw * s + d * half_dt * c,
-            T::zero(),
-            u.dt,
-        )
+        if let Some(j) = jacobians {
+            let (o, z) = (T::one(), T::zero());
+            j.a = SMatrix::<T, 3, 3>::new(o, z, -d * s, z, o, d * c, z, z, o);
+            // d(d)/d(omega) = v dt sinc'(h) dt/2;  d(a)/d(omega) = dt/2.
+            let dd_dw = v * u.dt * dsc * half_dt;
+            j.w = SMatrix::<T, 3, 2>::new(
+                u.dt * sc * c,
+                dd_dw * c - d * half_dt * s,
+                u.dt * sc * s,
+                dd_dw * s + d * half_dt * c,
+                z,
+                u.dt,
+            );
+        }
+        Vector3::new(x[0] + d * c, x[1] + d * s, wrap_angle(x[2] + omega * u.dt))
     }
 
     fn noise_cov(&self, u: &Velocities<T>) -> SMatrix<T, 2, 2> {

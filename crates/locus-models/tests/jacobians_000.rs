@@ -446,16 +446,19 @@ fn the_checker_catches_a_wrong_range_jacobian() {
     // (the beam's rotation) must fail the check, at the 000 test pose.
     struct Wrong<'a>(LaserRange<'a, f64>);
     impl MeasurementModel<f64, 3, 1> for Wrong<'_> {
-        fn h(&self, x: &SVector<f64, 3>) -> Option<SVector<f64, 1>> {
+        fn evaluate(
+            &self,
+            x: &SVector<f64, 3>,
+            jacobian: Option<&mut SMatrix<f64, 1, 3>>,
+        ) -> Option<SVector<f64, 1>> {
+            if let Some(j) = jacobian {
+                let hit = self.0.cast(x).unwrap().hit;
+                let n = hit.normal;
+                let dps = self.0.mount.sensor_position_dtheta(x[2]);
+                *j = self.0.jacobian(x);
+                j[2] = -n.dot(&dps) / hit.n_dot_u;
+            }
             self.0.h(x)
-        }
-        fn jacobian(&self, x: &SVector<f64, 3>) -> SMatrix<f64, 1, 3> {
-            let hit = self.0.cast(x).unwrap().hit;
-            let n = hit.normal;
-            let dps = self.0.mount.sensor_position_dtheta(x[2]);
-            let mut j = self.0.jacobian(x);
-            j[2] = -n.dot(&dps) / hit.n_dot_u;
-            j
         }
         fn noise(&self, x: &SVector<f64, 3>) -> SMatrix<f64, 1, 1> {
             self.0.noise(x)

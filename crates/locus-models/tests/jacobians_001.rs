@@ -123,24 +123,19 @@ fn the_checker_catches_a_wrong_jacobian() {
     struct Wrong(DiffDrive<f64>);
     impl locus_core::MotionModel<f64, 3, 2> for Wrong {
         type Input = WheelTravel<f64>;
-        fn f(&self, x: &SVector<f64, 3>, u: &Self::Input, q: &SVector<f64, 2>) -> SVector<f64, 3> {
-            self.0.f(x, u, q)
-        }
-        fn jacobian_state(
+        fn evaluate(
             &self,
             x: &SVector<f64, 3>,
             u: &Self::Input,
-        ) -> locus_core::nalgebra::Matrix3<f64> {
-            let mut a = self.0.jacobian_state(x, u);
-            a[(0, 2)] = -a[(0, 2)];
-            a
-        }
-        fn jacobian_noise(
-            &self,
-            x: &SVector<f64, 3>,
-            u: &Self::Input,
-        ) -> locus_core::nalgebra::SMatrix<f64, 3, 2> {
-            self.0.jacobian_noise(x, u)
+            q: &SVector<f64, 2>,
+            jacobians: Option<&mut locus_core::MotionJacobians<f64, 3, 2>>,
+        ) -> SVector<f64, 3> {
+            let Some(j) = jacobians else {
+                return self.0.f(x, u, q);
+            };
+            let fx = self.0.evaluate(x, u, q, Some(&mut *j));
+            j.a[(0, 2)] = -j.a[(0, 2)];
+            fx
         }
         fn noise_cov(&self, u: &Self::Input) -> locus_core::nalgebra::Matrix2<f64> {
             self.0.noise_cov(u)
