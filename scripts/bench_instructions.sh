@@ -26,7 +26,7 @@ count() { # variant, n, mode -> instructions of the whole run
         | sed -n 's/.*Collected : \([0-9]*\).*/\1/p'
 }
 
-variants="closed_f64 nalgebra_f64 locus_plain_f64 locus_joseph_f64 user_plain_f64 builtin_user_f64 closed_f32 nalgebra_f32 locus_plain_f32 locus_joseph_f32 user_plain_f32 builtin_user_f32"
+variants="closed_f64 nalgebra_f64 locus_plain_f64 locus_joseph_f64 user_plain_f64 builtin_user_f64 nalgebra_checked_f64 closed_f32 nalgebra_f32 locus_plain_f32 locus_joseph_f32 user_plain_f32 builtin_user_f32 nalgebra_checked_f32"
 echo "Instructions per step (callgrind, (I(2N) - I(N)) / N, N = $n; $bin):"
 for v in $variants; do
     a=$(count "$v" "$n" independent)

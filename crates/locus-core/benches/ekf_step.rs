@@ -12,6 +12,9 @@
 //!   equations written the way the traits' documentation shows first) through
 //!   the Locus API, plain update; `builtin_user_*` the built-in `DiffDrive`
 //!   with that user's measurement model;
+//! * `nalgebra_checked_*` plain nalgebra with the user's models and the
+//!   guarantees Locus gives (inputs and outputs checked finite, `P-` exactly
+//!   symmetric, `S` checked positive definite): what the guarantees cost;
 //! * `nalgebra_modelcalls_f64` the same, but evaluating the models through
 //!   the Locus traits (`f`, `jacobian_state`, `process_noise`, `h`,
 //!   `jacobian`, `noise`): separates model-evaluation cost from filter cost;
@@ -384,6 +387,39 @@ fn nalgebra_step<T: Scalar>(inp: &Inputs<T>) -> Belief<T, 3> {
     let p = a * inp.belief.p * a.transpose() + w * q * w.transpose();
     let (h, zhat, r) = ir_lin(&inp.obs, &x);
     nalgebra_correct(&x, &p, &h, &zhat, &r, &inp.z)
+}
+
+/// `nalgebra_step` with the user's models through the traits and the
+/// guarantees the Locus filter gives: every input and output checked
+/// finite, `P-` exactly symmetric, `S` checked positive definite.
+fn nalgebra_checked_step<T: Scalar>(inp: &Inputs<T>) -> Option<Belief<T, 3>> {
+    let ok = |v: &[T]| v.iter().fold(T::zero(), |a, b| a + *b * T::zero()) == T::zero();
+    let (m, b) = (user_drive(&inp.motion), &inp.belief);
+    if !(ok(b.x.as_slice()) && ok(b.p.as_slice())) {
+        return None;
+    }
+    let (x, a, w) = m.linearize(&b.x, &inp.u);
+    let p = a * b.p * a.transpose() + w * m.noise_cov(&inp.u) * w.transpose();
+    let p = (p + p.transpose()) * cast::<T>(0.5);
+    if !(ok(x.as_slice()) && ok(p.as_slice())) {
+        return None;
+    }
+    let o = UserIr(inp.obs);
+    let (zhat, h) = o.linearize(&x)?;
+    let r = o.noise(&x);
+    let pht = p * h.transpose();
+    let s = h * pht + r;
+    if !(s[(0, 0)] > T::zero() && s.determinant() > T::zero()) {
+        return None;
+    }
+    let s_inv = s.try_inverse()?;
+    let nu = inp.z - zhat;
+    let y = s_inv * nu;
+    if !ok(&[nu.dot(&y)]) {
+        return None;
+    }
+    let g = pht * s_inv;
+    Some(Belief::new(x + pht * y, p - g * pht.transpose()))
 }
 
 /// Plain nalgebra algebra, models evaluated through the Locus traits.
@@ -969,6 +1005,10 @@ fn step_variants<'a>(
             "builtin_user_f64",
             batch(i64_, move |i| builtin_user_step(black_box(plain), i)),
         ),
+        (
+            "nalgebra_checked_f64",
+            batch(i64_, |i| nalgebra_checked_step(i).expect("step")),
+        ),
         ("closed_f32", batch(i32_, closed_step)),
         ("nalgebra_f32", batch(i32_, nalgebra_step)),
         (
@@ -986,6 +1026,10 @@ fn step_variants<'a>(
         (
             "builtin_user_f32",
             batch(i32_, move |i| builtin_user_step(black_box(plain32), i)),
+        ),
+        (
+            "nalgebra_checked_f32",
+            batch(i32_, |i| nalgebra_checked_step(i).expect("step")),
         ),
     ]
 }
