@@ -10,7 +10,7 @@ const WINDOW = 4000; // samples kept in the charts (40 s at 100 Hz)
 const locus = {
   connected: false, hello: null, params: null, state: null, frames: 0,
   samples: 0, teleopFrames: 0, errors: [], lastCsv: null, ellipse: null,
-  lastCorrection: null, charts: {},
+  lastCorrection: null, charts: {}, estPoints: 0,
   // Attached to a robot (hello.robot), else null; the link's health.
   robot: null, link: null,
   // Every NIS received since the page loaded, with its time: {t, nis}.
@@ -49,12 +49,24 @@ function push(key, v, max = WINDOW) { const a = buf[key]; a.push(v); if (a.lengt
 function gateThreshold(c) { return c > 0 && c < 1 ? -2 * Math.log(1 - c) : null; }
 
 // ---- Charts (uPlot) -----------------------------------------------------------
-function chartWidth() { return Math.max(380, $('chart-p').clientWidth - 2); }
+// A plot fills its container's width (the grid decides it; the plot never
+// widens it): uPlot's own setSize, on every change of the container.
+const chartHeight = () => (document.body.classList.contains('big') ? 200 : 150);
+function chartWidth(id) { return Math.max(200, $(id).clientWidth - 2); }
+// Axes before any data: a scale with nothing to show gets a placeholder
+// range, so each plot shows its axes, units and legend from the start.
+function placeholderRange(lo, hi, log) {
+  return (u, min, max) => {
+    if (min == null || max == null || !Number.isFinite(min) || !Number.isFinite(max)) return [lo, hi];
+    if (log) return uPlot.rangeLog(min, max, 10, true);
+    return min === max ? uPlot.rangeNum(min - 1, max + 1, 0.1, true) : uPlot.rangeNum(min, max, 0.1, true);
+  };
+}
 const expTicks = (u, splits) => splits.map((v) => (v === null ? '' : v.toExponential(0)));
 function makeChart(id, title, series, scales, axes) {
   const opts = {
-    title, width: chartWidth(), height: 150,
-    scales: Object.assign({ x: { time: false } }, scales),
+    title, width: chartWidth(id), height: chartHeight(),
+    scales: Object.assign({ x: { time: false, range: (u, min, max) => (min == null || max == null ? [0, 10] : min === max ? [min, min + 1] : [min, max]) } }, scales),
     series: [{ label: 't [s]' }].concat(series),
     axes: [{ label: 't [s]', size: 30 }].concat(axes),
     legend: { live: true },
@@ -63,11 +75,16 @@ function makeChart(id, title, series, scales, axes) {
   const data = [[]].concat(series.map(() => []));
   const u = new uPlot(opts, data, $(id));
   locus.charts[id] = u;
+  new ResizeObserver(() => {
+    const width = chartWidth(id);
+    if (width !== u.width || chartHeight() !== u.height) u.setSize({ width, height: chartHeight() });
+  }).observe($(id));
   return u;
 }
 const charts = {};
 function initCharts() {
-  const logm = { distr: 3, auto: true };
+  const logm = { distr: 3, auto: true, range: placeholderRange(1e-6, 1, true) };
+  const lin = (lo, hi) => ({ auto: true, range: placeholderRange(lo, hi, false) });
   charts.p = makeChart('chart-p', 'Covariance: P_x, P_y [m²] (left), P_θ [rad²] (right), log',
     [{ label: 'P_x [m²]', stroke: '#0b6e99', scale: 'm2' },
      { label: 'P_y [m²]', stroke: '#9467bd', scale: 'm2' },
@@ -77,15 +94,15 @@ function initCharts() {
   charts.innov = makeChart('chart-innov', 'Innovation z − h(x⁻): distance [m] (left), heading [rad] (right)',
     [{ label: 'distance [m]', stroke: '#0b6e99', scale: 'm', points: { show: true, size: 3 }, paths: () => null },
      { label: 'heading [rad]', stroke: '#d62728', scale: 'rad', points: { show: true, size: 3 }, paths: () => null }],
-    {}, [{ scale: 'm', size: 60 }, { scale: 'rad', side: 1, size: 60, grid: { show: false } }]);
+    { m: lin(-0.05, 0.05), rad: lin(-0.1, 0.1) }, [{ scale: 'm', size: 60 }, { scale: 'rad', side: 1, size: 60, grid: { show: false } }]);
   charts.nis = makeChart('chart-nis', 'NIS (2 dof) and the gate threshold',
     [{ label: 'NIS', stroke: '#1b2a41', points: { show: true, size: 3 }, paths: () => null },
      { label: 'gate', stroke: '#b00020', dash: [6, 4], width: 1.5 }],
-    { y: { distr: 3 } }, [{ size: 50, values: expTicks }]);
+    { y: { distr: 3, range: placeholderRange(0.01, 100, true) } }, [{ size: 50, values: expTicks }]);
   charts.wheels = makeChart('chart-wheels', 'Wheel speeds V1 (right), V2 (left) [m/s]',
-    [{ label: 'V1 [m/s]', stroke: '#0b6e99' }, { label: 'V2 [m/s]', stroke: '#f0a202' }], {}, [{ size: 50 }]);
+    [{ label: 'V1 [m/s]', stroke: '#0b6e99' }, { label: 'V2 [m/s]', stroke: '#f0a202' }], { y: lin(0, 0.3) }, [{ size: 50 }]);
   charts.ir = makeChart('chart-ir', 'IR distances d_s1, d_s2 [m]',
-    [{ label: 'd_s1 [m]', stroke: '#d62728' }, { label: 'd_s2 [m]', stroke: '#2ca02c' }], {}, [{ size: 50 }]);
+    [{ label: 'd_s1 [m]', stroke: '#d62728' }, { label: 'd_s2 [m]', stroke: '#2ca02c' }], { y: lin(0, 0.5) }, [{ size: 50 }]);
 }
 function updateCharts() {
   const t = buf.t;
@@ -156,6 +173,7 @@ function drawArena() {
   if ($('show-odo').checked) drawPath(ctx, buf.odo, '#9aa7b4', 1.5);
   if (buf.truth.length) drawPath(ctx, buf.truth, '#1b7f3a', 2);
   drawPath(ctx, buf.est, '#0b6e99', 2);
+  locus.estPoints = buf.est.length;
   const s = locus.state, last = locus.lastSample;
   if (!last) return;
   // Beams.
@@ -433,7 +451,12 @@ function wire() {
     held.delete(e.key);
     if (held.size === 0) { clearInterval(repeat); repeat = null; send({ type: 'teleop_off' }); } else send(command());
   });
-  window.addEventListener('resize', () => { for (const u of Object.values(charts)) u.setSize({ width: chartWidth(), height: 150 }); });
+  $('big').onclick = () => {
+    const on = document.body.classList.toggle('big');
+    $('big').setAttribute('aria-pressed', String(on));
+    $('big').classList.toggle('active', on);
+    for (const [id, u] of Object.entries(locus.charts)) u.setSize({ width: chartWidth(id), height: chartHeight() });
+  };
 }
 
 buildForm('params', LIVE);
