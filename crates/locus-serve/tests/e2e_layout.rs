@@ -163,6 +163,25 @@ async fn the_page_fits_a_projector_a_laptop_and_a_desktop() {
             }
         }
     }
+    // Large text, on the projector: still no horizontal scroll, titles
+    // whole, taller plots.
+    c.set_window_size(1024, 768).await.expect("window size");
+    let height = num(&c, "locus.charts['chart-p'].height").await;
+    click(&c, "big").await;
+    wait_for(&c, "document.body.classList.contains('big')", long).await;
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    screenshot(&c, "ui-layout-1024x768-large-text.png").await;
+    let layout = js(&c, LAYOUT).await;
+    if layout["scrollWidth"].as_f64() > layout["innerWidth"].as_f64()
+        || layout["charts"]
+            .as_array()
+            .expect("charts")
+            .iter()
+            .any(|c| c["titleClipped"] != json!(false))
+        || num(&c, "locus.charts['chart-p'].height").await <= height
+    {
+        failed.push(format!("large text at 1024x768: {layout}"));
+    }
     assert!(failed.is_empty(), "{}", failed.join("\n"));
     let _ = std::fs::remove_dir_all(&downloads);
 }
