@@ -9,7 +9,7 @@
 //!   before it touches the filter.
 //! - The UDP plumbing every endpoint shares: the [`Error`] type,
 //!   [`at_least_1us`] and [`is_timeout`]. The simulated robot endpoint
-//!   (`locus_sim::link_robot`) builds on them.
+//!   (`locus_simlink`) builds on them.
 //!
 //! An endpoint takes an already bound [`std::net::UdpSocket`], so a caller
 //! chooses the address (the CLI binds `127.0.0.1` by default) and tests can

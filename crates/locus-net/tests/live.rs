@@ -16,7 +16,7 @@ use locus_net::Error;
 use locus_net::host::{Drive, Host, HostConfig, Outcome, run_host_live};
 use locus_net::transport::Udp;
 use locus_sim::closed_loop::SquareConfig;
-use locus_sim::link_robot::{RobotConfig, host_config, run_robot};
+use locus_simlink::{RobotConfig, host_config, run_robot};
 
 fn config() -> HostConfig {
     host_config(&SquareConfig::default())

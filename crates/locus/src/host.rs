@@ -9,7 +9,7 @@ use clap::Args as ClapArgs;
 use comfy_table::Table;
 use locus_net::host::{HostStep, run_host, run_host_over};
 use locus_net::transport::Serial;
-use locus_sim::link_robot::host_config;
+use locus_simlink::host_config;
 
 use crate::link_scenario::square_config;
 

@@ -7,7 +7,7 @@ use std::net::UdpSocket;
 use anyhow::Context;
 use clap::Args as ClapArgs;
 use locus_net::transport::Serial;
-use locus_sim::link_robot::{RobotConfig, run_robot, run_robot_over};
+use locus_simlink::{RobotConfig, run_robot, run_robot_over};
 
 use crate::link_scenario::square_config;
 

@@ -79,7 +79,7 @@ pub fn run(args: &Args) -> Result<()> {
                 locus_serve::robot::Link::udp(args.bind, robot)
                     .with_context(|| format!("binding UDP {}", args.bind))?
             };
-            let mut host = locus_sim::link_robot::host_config(&cfg);
+            let mut host = locus_simlink::host_config(&cfg);
             // A live session: the path repeats until the page stops it.
             host.laps = usize::MAX;
             Some(locus_serve::robot::Attached::start(

@@ -6,7 +6,7 @@
 //! pair, `Q`, `R`, gate, initial belief); the IR pair is associated with
 //! the arena walls the caller gives, and the path controller
 //! ([`FollowPath::square`]) drives the laps. The host knows nothing of the
-//! robot beyond the protocol: a simulator (`locus_sim::link_robot`) or a
+//! robot beyond the protocol: a simulator (`locus_simlink`) or a
 //! real robot.
 //!
 //! # Loop

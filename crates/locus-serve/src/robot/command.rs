@@ -173,7 +173,7 @@ mod tests {
     use crate::robot::UNAVAILABLE;
 
     fn host() -> Host {
-        let mut cfg = locus_sim::link_robot::host_config(&locus_sim::SquareConfig::default());
+        let mut cfg = locus_simlink::host_config(&locus_sim::SquareConfig::default());
         cfg.laps = usize::MAX;
         Host::new(&cfg).unwrap()
     }
