@@ -48,6 +48,16 @@ pub enum Error {
     /// A configuration value is invalid; the text names it.
     #[error("invalid configuration: {0}")]
     Config(&'static str),
+    /// A setting is outside its one accepted range
+    /// ([`locus_models::settings`], shared with the simulator and the
+    /// teaching UI).
+    #[error("invalid configuration: `{}` must be in {limit}, got {value:e}", limit.field)]
+    OutOfRange {
+        /// The setting's range (and name).
+        limit: locus_models::settings::Limit,
+        /// The value refused.
+        value: f64,
+    },
 }
 
 /// `d` clamped to at least 1 us (a zero read timeout is an error for

@@ -65,6 +65,18 @@ fn setters_refuse_bad_values_and_change_nothing() {
         assert!(matches!(bad, Err(Error::Config(_))), "{bad:?}");
     }
     assert_eq!(*host.config(), before, "nothing changed");
+    // Inside the host's domain, outside the limits the simulator and the
+    // teaching UI share (locus_models::settings): refused alike.
+    for bad in [
+        host.set_noise(1e-6, 1e-6, 2.0, 2.5e-5),
+        host.set_control(locus_control::Config {
+            v_ref: 1.0,
+            ..before.control
+        }),
+    ] {
+        assert!(matches!(bad, Err(Error::OutOfRange { .. })), "{bad:?}");
+    }
+    assert_eq!(*host.config(), before, "nothing changed");
     assert_eq!(host.drive(0.0), Drive::Path);
 
     host.set_noise(2e-6, 3e-6, 1e-3, 2e-3).unwrap();

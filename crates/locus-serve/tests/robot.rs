@@ -262,7 +262,11 @@ async fn the_page_drives_a_robot_over_udp() {
         ),
         (json!({"type": "params", "values": {"r11": -1}}), "r11"),
         (json!({"type": "teleop", "v": 9, "w": 0}), "teleop_v"),
-        (json!({"type": "start", "bogus": 1}), "message"),
+        (json!({"type": "start", "bogus": 1}), "bogus"),
+        (
+            json!({"type": "params", "values": {"r11": 1e-4, "q12": 1}}),
+            "q12",
+        ),
     ] {
         send(&mut ws, &msg).await;
         let e = next_error(&mut ws).await;
@@ -357,10 +361,7 @@ async fn the_page_drives_a_robot_over_a_serial_line() {
     };
     std::thread::spawn(move || {
         let port: Box<dyn SerialPort> = Box::new(robot_end);
-        locus_simlink::run_robot_over(
-            &mut locus_net::transport::Serial::new(port),
-            &robot_cfg,
-        )
+        locus_simlink::run_robot_over(&mut locus_net::transport::Serial::new(port), &robot_cfg)
     });
 
     let mut cfg = locus_simlink::host_config(&locus_sim::SquareConfig::default());

@@ -36,8 +36,8 @@ pub struct Args {
     baud: u32,
     /// `square` or a scenario file whose `scenario = "square"` (the robot's
     /// geometry, the filter's Q and R, the controller).
-    #[arg(default_value = "square", value_name = "SCENARIO|FILE")]
-    scenario: String,
+    #[arg(default_value = "square", value_name = "SCENARIO|FILE", value_parser = crate::args::ScenarioParser)]
+    scenario: crate::args::ScenarioArg,
     /// Print every applied packet's estimate (robot time, x, y, theta).
     #[arg(long)]
     verbose: bool,

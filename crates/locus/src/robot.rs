@@ -29,8 +29,8 @@ pub struct Args {
     #[arg(long, default_value_t = 115_200, value_parser = crate::args::baud)]
     baud: u32,
     /// `square` or a scenario file whose `scenario = "square"`.
-    #[arg(default_value = "square", value_name = "SCENARIO|FILE")]
-    scenario: String,
+    #[arg(default_value = "square", value_name = "SCENARIO|FILE", value_parser = crate::args::ScenarioParser)]
+    scenario: crate::args::ScenarioArg,
     /// Seed of the simulation's random numbers.
     #[arg(long, default_value_t = 1)]
     seed: u64,
