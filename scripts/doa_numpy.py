@@ -12,7 +12,7 @@ settling time (the time after which max|x^ - x_n| stays below 0.0087), or
 `none` if a vertex does not converge (diverged: a mark at z_c <= 0.05 m or a
 non-finite value; or a final error not below 0.0087).
 
-It then runs the Rust twin (`cargo run --release -p locus-analysis --example
+It then runs the Rust twin (`cargo run --release -p locus-doa --example
 doa_cell`), checks that both give the same worst settling time and prints the
 time per cell of each and the ratio.
 
@@ -140,7 +140,7 @@ def main():
         best = min(best, time.perf_counter() - t)
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     out = subprocess.run(
-        ["cargo", "run", "--quiet", "--release", "-p", "locus-analysis", "--example", "doa_cell",
+        ["cargo", "run", "--quiet", "--release", "-p", "locus-doa", "--example", "doa_cell",
          "--", str(v_g), str(alpha), str(m), "5"],
         cwd=root, check=True, capture_output=True, text=True,
     ).stdout

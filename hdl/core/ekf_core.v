@@ -10,7 +10,7 @@
 // d/det, -b/det, -c/det, a/det (negation flips the sign bit).
 //
 // Every element is computed in the order of the software reference
-// (locus_analysis::hw::run): a dot product of length k is
+// (locus_hw::run): a dot product of length k is
 // ((a0 b0 + a1 b1) + a2 b2), each product and sum rounded to nearest even,
 // so the core's results equal the software f32 schedule bit for bit.
 //

@@ -14,6 +14,7 @@ pub mod laser_wall;
 pub mod observer;
 pub mod plausible;
 pub mod range_bearing;
+pub mod settings;
 pub mod skid_steer;
 pub mod square001;
 pub mod tricycle;

@@ -17,7 +17,7 @@ use criterion::{Criterion, Throughput, criterion_group};
 use locus_link::{CommandPacket, MAX_PACKET, Receiver, Telemetry};
 use locus_net::host::run_host;
 use locus_sim::closed_loop::SquareConfig;
-use locus_sim::link_robot::{RobotConfig, host_config, run_robot};
+use locus_simlink::{RobotConfig, host_config, run_robot};
 
 /// Robot seconds per wall second: 100 Hz telemetry becomes 10 000 per
 /// second.

@@ -9,7 +9,7 @@
 //!   before it touches the filter.
 //! - The UDP plumbing every endpoint shares: the [`Error`] type,
 //!   [`at_least_1us`] and [`is_timeout`]. The simulated robot endpoint
-//!   (`locus_sim::link_robot`) builds on them.
+//!   (`locus_simlink`) builds on them.
 //!
 //! An endpoint takes an already bound [`std::net::UdpSocket`], so a caller
 //! chooses the address (the CLI binds `127.0.0.1` by default) and tests can
@@ -48,6 +48,16 @@ pub enum Error {
     /// A configuration value is invalid; the text names it.
     #[error("invalid configuration: {0}")]
     Config(&'static str),
+    /// A setting is outside its one accepted range
+    /// ([`locus_models::settings`], shared with the simulator and the
+    /// teaching UI).
+    #[error("invalid configuration: `{}` must be in {limit}, got {value:e}", limit.field)]
+    OutOfRange {
+        /// The setting's range (and name).
+        limit: locus_models::settings::Limit,
+        /// The value refused.
+        value: f64,
+    },
 }
 
 /// `d` clamped to at least 1 us (a zero read timeout is an error for

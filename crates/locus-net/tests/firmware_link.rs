@@ -30,7 +30,7 @@ use std::time::Instant;
 use locus_net::host::run_host_over;
 use locus_net::transport::Serial;
 use locus_sim::closed_loop::{SquareConfig, StepRecord, run_square};
-use locus_sim::link_robot::host_config;
+use locus_simlink::host_config;
 
 const THUMB: &str = "thumbv7em-none-eabihf";
 /// Steps of the recorded sequence; telemetry 0 comes before the first.

@@ -15,7 +15,7 @@ use locus_net::host::{Dropped, Host, HostConfig, HostReport, Outcome, run_host};
 use locus_net::plausible::Implausible;
 use locus_odometry::Wheel;
 use locus_sim::closed_loop::SquareConfig;
-use locus_sim::link_robot::{RobotConfig, host_config, run_robot};
+use locus_simlink::{RobotConfig, host_config, run_robot};
 use proptest::prelude::*;
 
 /// Telemetry period of the scripted robot (us).

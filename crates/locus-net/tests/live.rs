@@ -16,7 +16,7 @@ use locus_net::Error;
 use locus_net::host::{Drive, Host, HostConfig, Outcome, run_host_live};
 use locus_net::transport::Udp;
 use locus_sim::closed_loop::SquareConfig;
-use locus_sim::link_robot::{RobotConfig, host_config, run_robot};
+use locus_simlink::{RobotConfig, host_config, run_robot};
 
 fn config() -> HostConfig {
     host_config(&SquareConfig::default())
@@ -63,6 +63,18 @@ fn setters_refuse_bad_values_and_change_nothing() {
         host.set_teleop(0.0, 0.0, f64::INFINITY),
     ] {
         assert!(matches!(bad, Err(Error::Config(_))), "{bad:?}");
+    }
+    assert_eq!(*host.config(), before, "nothing changed");
+    // Inside the host's domain, outside the limits the simulator and the
+    // teaching UI share (locus_models::settings): refused alike.
+    for bad in [
+        host.set_noise(1e-6, 1e-6, 2.0, 2.5e-5),
+        host.set_control(locus_control::Config {
+            v_ref: 1.0,
+            ..before.control
+        }),
+    ] {
+        assert!(matches!(bad, Err(Error::OutOfRange { .. })), "{bad:?}");
     }
     assert_eq!(*host.config(), before, "nothing changed");
     assert_eq!(host.drive(0.0), Drive::Path);

@@ -3,7 +3,7 @@
 //! fault-injecting proxy (loss, duplicates, reordering, corruption) whose
 //! injections the host's counters must match exactly; the robot's
 //! watchdog; the host's configuration check. The robot endpoint is the
-//! simulator's (`locus_sim::link_robot`).
+//! simulator's (`locus_simlink`).
 
 extern crate alloc;
 
@@ -18,7 +18,7 @@ use std::thread;
 use locus_link::Telemetry;
 use locus_net::host::{HostConfig, HostReport, run_host};
 use locus_sim::closed_loop::{SquareConfig, run_square};
-use locus_sim::link_robot::{RobotConfig, RobotReport, host_config, run_robot};
+use locus_simlink::{RobotConfig, RobotReport, host_config, run_robot};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 

@@ -17,7 +17,7 @@ use locus_link::framing::{FrameDecoder, MAX_FRAME, encode_frame};
 use locus_net::host::{HostReport, run_host_over};
 use locus_net::transport::Serial;
 use locus_sim::closed_loop::{SquareConfig, run_square};
-use locus_sim::link_robot::{RobotConfig, RobotReport, host_config, run_robot_over};
+use locus_simlink::{RobotConfig, RobotReport, host_config, run_robot_over};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 use serialport::{SerialPort, TTYPort};

@@ -433,7 +433,9 @@ function wire() {
   const held = new Set();
   const KEYS = ['ArrowUp', 'ArrowDown', 'ArrowLeft', 'ArrowRight'];
   const command = () => {
-    const vref = locus.params ? Math.min(locus.params.values.v_ref, 0.3) : 0.1;
+    // The server's limit of teleop_v (hello's limits), not a copy of it.
+    const top = locus.hello ? locus.hello.limits.find((l) => l.field === 'teleop_v') : null;
+    const vref = Math.min(locus.params ? locus.params.values.v_ref : 0.1, top ? top.max : 0);
     const v = (held.has('ArrowUp') ? vref : 0) - (held.has('ArrowDown') ? vref : 0);
     const w = (held.has('ArrowLeft') ? 1 : 0) - (held.has('ArrowRight') ? 1 : 0);
     return { type: 'teleop', v, w };

@@ -128,7 +128,7 @@ impl Default for Config {
     /// default limits.
     fn default() -> Self {
         Self {
-            scenario_name: "square".to_string(),
+            scenario_name: locus_sim::scenario_file::Scenario::Square.to_string(),
             scenario: SquareConfig::default(),
             seed: 1,
             tick: Duration::from_millis(50),

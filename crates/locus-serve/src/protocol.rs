@@ -10,7 +10,7 @@ use locus_sim::CorrectionDetail;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::params::{Invalid, Limit};
+use crate::params::{InitialPatch, Invalid, Limit, ParamPatch};
 use crate::presets::{LiveFigure, Preset};
 
 /// A message from the page.
@@ -49,20 +49,21 @@ pub enum ClientMsg {
     },
     /// Back to the path controller.
     TeleopOff {},
-    /// Live parameters; each field is optional, all or nothing is applied.
+    /// Live parameters; each field is optional, all or nothing is applied;
+    /// an unknown field makes the message invalid.
     Params {
         /// The fields: `q11`, `q22`, `r11`, `r22`, `ir_sigma`, `use_ir`,
         /// `gate` (0: no gate), `v_ref`, `w_ref`, `k_cross`, `k_heading`,
         /// `k_pos`;
         /// numbers or their text.
-        values: serde_json::Map<String, Value>,
+        values: ParamPatch,
     },
     /// Initial pose and covariance (standard deviations), applied at the
     /// next reset: `start_x`, `start_y`, `start_theta`, `std_x`, `std_y`,
     /// `std_theta`.
     Initial {
         /// The fields, numbers or their text.
-        values: serde_json::Map<String, Value>,
+        values: InitialPatch,
     },
     /// Switch scenario (`square` or `square-ideal`) and reset.
     Scenario {
@@ -325,5 +326,22 @@ impl From<Invalid> for ServerMsg {
             field: e.field,
             message: e.reason,
         }
+    }
+}
+
+/// The `error` answer to a message that could not be read as a
+/// [`ClientMsg`]: its field is the unknown key when that is why (serde's
+/// `unknown field `KEY`` of `deny_unknown_fields`, in a message or in its
+/// `values`), else `message`.
+#[must_use]
+pub fn unreadable(e: &serde_json::Error) -> ServerMsg {
+    let text = e.to_string();
+    let field = text
+        .strip_prefix("unknown field `")
+        .and_then(|rest| rest.split_once('`'))
+        .map_or("message", |(key, _)| key);
+    ServerMsg::Error {
+        field: field.to_string(),
+        message: format!("not a valid message: {text}"),
     }
 }

@@ -7,16 +7,17 @@ use std::time::Instant;
 
 use locus_eval::Record;
 use locus_sim::closed_loop::NoiseModel;
+use locus_sim::scenario_file::{Scenario, ScenarioConfig};
 use locus_sim::{CorrectionDetail, LiveParams, SquareConfig, SquareSim, StepRecord, Teleop};
-use serde_json::{Map, Value};
 
-use crate::params::{self, Invalid};
+use crate::params::{self, InitialPatch, Invalid, ParamPatch};
 use crate::presets::{self, RunFigures};
 use crate::protocol::{Beam, ClientMsg, ParamValues, Sample, ServerMsg};
 use crate::{Error, Limits};
 
-/// The scenarios a session can switch to.
-pub const SCENARIOS: [&str; 2] = ["square", "square-ideal"];
+/// The scenarios a session can switch to (the built-ins of the square
+/// kind).
+pub const SCENARIOS: [Scenario; 2] = [Scenario::Square, Scenario::SquareIdeal];
 
 /// Teleoperation stops this long after the last `teleop` message (the
 /// page repeats it while a key is held), like the robot's watchdog.
@@ -139,7 +140,7 @@ impl Session {
         ServerMsg::Hello {
             session: self.id,
             scenario: self.scenario.clone(),
-            scenarios: SCENARIOS.to_vec(),
+            scenarios: SCENARIOS.map(Scenario::name).to_vec(),
             walls: self.sim.world().walls.iter().map(|w| [w.a, w.b]).collect(),
             path: vec![[-h, -h], [h, -h], [h, h], [-h, h]],
             dt: self.cfg.dt,
@@ -187,10 +188,7 @@ impl Session {
     pub fn handle_text(&mut self, text: &str, now: Instant) -> Vec<ServerMsg> {
         match serde_json::from_str::<ClientMsg>(text) {
             Ok(msg) => self.handle(msg, now),
-            Err(e) => vec![ServerMsg::Error {
-                field: "message".to_string(),
-                message: format!("not a valid message: {e}"),
-            }],
+            Err(e) => vec![crate::protocol::unreadable(&e)],
         }
     }
 
@@ -264,15 +262,19 @@ impl Session {
                 vec![self.params()]
             }
             ClientMsg::Scenario { name } => {
-                let cfg = match name.as_str() {
-                    "square" => SquareConfig::default(),
-                    "square-ideal" => SquareConfig::ideal(),
-                    _ => {
-                        return Err(Invalid::new(
-                            "scenario",
-                            format!("must be one of {}", SCENARIOS.join(", ")),
-                        ));
-                    }
+                let chosen = name
+                    .parse::<Scenario>()
+                    .ok()
+                    .filter(|s| SCENARIOS.contains(s))
+                    .map(Scenario::config);
+                let Some(ScenarioConfig::Square(cfg)) = chosen else {
+                    return Err(Invalid::new(
+                        "scenario",
+                        format!(
+                            "must be one of {}",
+                            SCENARIOS.map(Scenario::name).join(", ")
+                        ),
+                    ));
                 };
                 self.scenario_base = SquareConfig {
                     laps: self.scenario_base.laps,
@@ -319,28 +321,10 @@ impl Session {
     }
 
     /// Validates `values` (all or nothing) and applies them live.
-    fn set_params(&mut self, values: &Map<String, Value>) -> Result<(), Invalid> {
-        let mut live = LiveParams::of(self.sim.config());
-        for (key, value) in values {
-            match key.as_str() {
-                "q11" => live.q11 = params::checked(key, value)?,
-                "q22" => live.q22 = params::checked(key, value)?,
-                "r11" => live.r11 = params::checked(key, value)?,
-                "r22" => live.r22 = params::checked(key, value)?,
-                "ir_sigma" => live.ir_sigma = params::checked(key, value)?,
-                "use_ir" => live.use_ir = params::boolean(key, value)?,
-                "gate" => {
-                    let g = params::checked(key, value)?;
-                    live.gate_confidence = (g > 0.0).then_some(g);
-                }
-                "v_ref" => live.control.v_ref = params::checked(key, value)?,
-                "w_ref" => live.control.w_ref = params::checked(key, value)?,
-                "k_cross" => live.control.k_cross = params::checked(key, value)?,
-                "k_heading" => live.control.k_heading = params::checked(key, value)?,
-                "k_pos" => live.control.k_pos = params::checked(key, value)?,
-                _ => return Err(Invalid::new(key, "is not a live parameter")),
-            }
-        }
+    fn set_params(&mut self, values: &ParamPatch) -> Result<(), Invalid> {
+        let live = values
+            .checked()?
+            .applied_to(&LiveParams::of(self.sim.config()));
         self.sim
             .set_live(&live)
             .map_err(|e| Invalid::new("params", e.to_string()))?;
@@ -351,20 +335,8 @@ impl Session {
 
     /// Validates the initial pose and standard deviations (all or nothing)
     /// for the next reset.
-    fn set_initial(&mut self, values: &Map<String, Value>) -> Result<(), Invalid> {
-        let (mut start, mut std) = (self.cfg.start, self.cfg.initial_std);
-        for (key, value) in values {
-            let v = params::checked(key, value)?;
-            match key.as_str() {
-                "start_x" => start[0] = v,
-                "start_y" => start[1] = v,
-                "start_theta" => start[2] = v,
-                "std_x" => std[0] = v,
-                "std_y" => std[1] = v,
-                "std_theta" => std[2] = v,
-                _ => return Err(Invalid::new(key, "is not an initial value")),
-            }
-        }
+    fn set_initial(&mut self, values: &InitialPatch) -> Result<(), Invalid> {
+        let (start, std) = values.applied_to(self.cfg.start, self.cfg.initial_std)?;
         self.cfg.start = start;
         self.cfg.initial_std = std;
         Ok(())

@@ -1,6 +1,6 @@
 //! End-to-end test of the teaching UI attached to a robot in real
 //! headless Chromium (`support/browser.rs`): the page attached to a
-//! simulated robot (`locus_sim::link_robot::run_robot`) over loopback UDP
+//! simulated robot (`locus_simlink::run_robot`) over loopback UDP
 //! (`locus serve --robot`).
 #![allow(
     clippy::std_instead_of_core,

@@ -1,5 +1,5 @@
 //! `locus serve --robot`: the page's WebSocket attached to a host session
-//! that localises a simulated robot (`locus_sim::link_robot::run_robot`)
+//! that localises a simulated robot (`locus_simlink::run_robot`)
 //! over loopback UDP. Over a real WebSocket: the host starts stopped (zero
 //! wheel speeds), `start` drives the path, an `R` multiplied by 100 on the
 //! page lowers the NIS of the host's corrections, the keyboard twist turns
@@ -262,7 +262,11 @@ async fn the_page_drives_a_robot_over_udp() {
         ),
         (json!({"type": "params", "values": {"r11": -1}}), "r11"),
         (json!({"type": "teleop", "v": 9, "w": 0}), "teleop_v"),
-        (json!({"type": "start", "bogus": 1}), "message"),
+        (json!({"type": "start", "bogus": 1}), "bogus"),
+        (
+            json!({"type": "params", "values": {"r11": 1e-4, "q12": 1}}),
+            "q12",
+        ),
     ] {
         send(&mut ws, &msg).await;
         let e = next_error(&mut ws).await;
@@ -345,7 +349,7 @@ async fn the_page_drives_a_robot_over_a_serial_line() {
         stop.clone(),
     );
     let down = cable(host_master, robot_master, stop.clone());
-    let robot_cfg = locus_sim::link_robot::RobotConfig {
+    let robot_cfg = locus_simlink::RobotConfig {
         square: locus_sim::SquareConfig {
             max_time: 5000.0,
             ..locus_sim::SquareConfig::default()
@@ -353,17 +357,14 @@ async fn the_page_drives_a_robot_over_a_serial_line() {
         time_scale: TIME_SCALE,
         idle_exit: 30.0,
         handshake: Duration::from_secs(60),
-        ..locus_sim::link_robot::RobotConfig::default()
+        ..locus_simlink::RobotConfig::default()
     };
     std::thread::spawn(move || {
         let port: Box<dyn SerialPort> = Box::new(robot_end);
-        locus_sim::link_robot::run_robot_over(
-            &mut locus_net::transport::Serial::new(port),
-            &robot_cfg,
-        )
+        locus_simlink::run_robot_over(&mut locus_net::transport::Serial::new(port), &robot_cfg)
     });
 
-    let mut cfg = locus_sim::link_robot::host_config(&locus_sim::SquareConfig::default());
+    let mut cfg = locus_simlink::host_config(&locus_sim::SquareConfig::default());
     cfg.laps = usize::MAX;
     let link = locus_serve::robot::Link::serial(&device, 115_200).unwrap();
     let attached =

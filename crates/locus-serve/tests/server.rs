@@ -171,12 +171,26 @@ fn bad_values_are_refused_by_name_and_nothing_is_applied() {
             "use_ir",
         ),
         (json!({"type": "params", "values": {"dt": 1}}), "dt"),
+        (
+            json!({"type": "params", "values": {"r11": 1e-4, "ir_noise": 0.01}}),
+            "ir_noise",
+        ),
+        (
+            json!({"type": "initial", "values": {"start_z": 0}}),
+            "start_z",
+        ),
+        // Outside the limits the simulator shares (locus_models::settings).
+        (
+            json!({"type": "params", "values": {"ir_sigma": 0.2}}),
+            "ir_sigma",
+        ),
         (json!({"type": "speed", "factor": 0}), "speed"),
         (json!({"type": "teleop", "v": 5, "w": 0}), "teleop_v"),
         (json!({"type": "initial", "values": {"std_x": 0}}), "std_x"),
         (json!({"type": "preset", "step": "z"}), "preset"),
         (json!({"type": "scenario", "name": "wall45"}), "scenario"),
         (json!({"type": "launch_missiles"}), "message"),
+        (json!({"type": "start", "bogus": 1}), "bogus"),
         (json!({"no": "type"}), "message"),
     ] {
         let out = s.handle_text(&msg.to_string(), now);

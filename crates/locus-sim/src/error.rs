@@ -21,6 +21,19 @@ pub enum Error {
         /// What the field must be.
         reason: &'static str,
     },
+    /// A setting is outside its one accepted range
+    /// ([`locus_models::settings`], shared with the teaching UI and the
+    /// host).
+    #[error("invalid configuration: `{field}` must be in {limit}, got {value:e}")]
+    OutOfRange {
+        /// The field's name as in a scenario file (`control.v_ref`,
+        /// `start` for any of its three components).
+        field: &'static str,
+        /// The setting's range.
+        limit: locus_models::settings::Limit,
+        /// The value refused.
+        value: f64,
+    },
     /// The simulated robot rejected a command.
     #[error("robot: {0}")]
     Robot(#[from] RobotError),

@@ -7,8 +7,8 @@
 //! run is reproducible from its seed.
 //!
 //! The scenarios of `locus run` (paper 001's square closed loop, wall45,
-//! tricycle-slip, hover), the guide and the simulated robot of the link
-//! build on it.
+//! tricycle-slip, hover) and the guide build on it; so does the simulated
+//! robot of the link (`locus-simlink`).
 #![forbid(unsafe_code)]
 
 pub mod closed_loop;
@@ -17,7 +17,6 @@ pub mod family;
 pub mod firmware_data;
 pub mod guide;
 pub mod hover;
-pub mod link_robot;
 mod noise;
 pub mod robot;
 pub mod scenario_file;

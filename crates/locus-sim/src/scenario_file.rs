@@ -1,6 +1,6 @@
 //! Scenarios by name or from a TOML file.
 //!
-//! A built-in scenario is a name ([`BUILTIN`]: `square`, `square-ideal`, `wall45`,
+//! A built-in scenario is a [`Scenario`] (`square`, `square-ideal`, `wall45`,
 //! `tricycle-slip`, `hover`). A scenario file names its kind in a top-level `scenario = "square"` (any
 //! built-in name); every other key overrides that built-in's configuration
 //! (for `square`: the fields of [`SquareConfig`], nested `[control]` for the
@@ -18,8 +18,8 @@
 //! v_ref = 0.15          # m/s
 //! ```
 //!
-//! Adding a scenario kind: a [`ScenarioConfig`] variant, its name in
-//! [`BUILTIN`] and one arm in each `match` of this file (the compiler lists
+//! Adding a scenario kind: a [`ScenarioConfig`] variant, a [`Scenario`]
+//! (in [`Scenario::ALL`]) and one arm in each `match` of this file (the compiler lists
 //! them: the enum is exhaustive). In [`parse`], a kind whose built-in is its
 //! config's `Default` can use `toml::from_str::<XConfig>` on the blanked
 //! text (needs only `Deserialize`); a preset that differs from `Default` uses `overlay` (also
@@ -50,8 +50,87 @@ pub(crate) fn within(v: f64, lo: f64, hi: f64) -> bool {
     v.is_finite() && (lo..=hi).contains(&v)
 }
 
-/// The built-in scenarios, by name.
-pub const BUILTIN: [&str; 5] = ["square", "square-ideal", "wall45", "tricycle-slip", "hover"];
+/// A built-in scenario. Its name (`square`, `square-ideal`, `wall45`,
+/// `tricycle-slip`, `hover`) is what [`FromStr`](core::str::FromStr)
+/// reads and [`Display`](core::fmt::Display) writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Scenario {
+    /// Paper 001's closed loop on the square arena, realistic noise
+    /// ([`SquareConfig::default`]).
+    Square,
+    /// The same loop with noise exactly as the filter assumes, no gate
+    /// ([`SquareConfig::ideal`]).
+    SquareIdeal,
+    /// Paper 000's skid-steer robot at the 45-degree wall.
+    Wall45,
+    /// Paper 004's tricycle with wheel slip.
+    TricycleSlip,
+    /// Paper 002's body hovering in front of the camera.
+    Hover,
+}
+
+impl Scenario {
+    /// Every built-in scenario, in the order `--help` lists them.
+    pub const ALL: [Self; 5] = [
+        Self::Square,
+        Self::SquareIdeal,
+        Self::Wall45,
+        Self::TricycleSlip,
+        Self::Hover,
+    ];
+
+    /// The scenario's name (`square-ideal`).
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Square => "square",
+            Self::SquareIdeal => "square-ideal",
+            Self::Wall45 => "wall45",
+            Self::TricycleSlip => "tricycle-slip",
+            Self::Hover => "hover",
+        }
+    }
+
+    /// The scenario's configuration.
+    #[must_use]
+    pub fn config(self) -> ScenarioConfig {
+        match self {
+            Self::Square => ScenarioConfig::Square(SquareConfig::default()),
+            Self::SquareIdeal => ScenarioConfig::Square(SquareConfig::ideal()),
+            Self::Wall45 => ScenarioConfig::Wall45(Wall45Config::default()),
+            Self::TricycleSlip => ScenarioConfig::TricycleSlip(TricycleSlipConfig::default()),
+            Self::Hover => ScenarioConfig::Hover(HoverConfig::default()),
+        }
+    }
+
+    /// The names of [`Scenario::ALL`], joined by `", "`.
+    #[must_use]
+    pub fn names() -> String {
+        Self::ALL.map(Self::name).join(", ")
+    }
+}
+
+impl core::fmt::Display for Scenario {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A name that is no built-in scenario.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown scenario `{0}`; supported scenarios: {names}", names = Scenario::names())]
+pub struct UnknownScenario(pub String);
+
+impl core::str::FromStr for Scenario {
+    type Err = UnknownScenario;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Self::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| UnknownScenario(s.to_string()))
+    }
+}
 
 /// A scenario's configuration, by kind. Exhaustive on purpose: a new kind
 /// must be handled wherever scenarios are dispatched.
@@ -73,28 +152,16 @@ pub enum ScenarioConfig {
 }
 
 impl ScenarioConfig {
-    /// The built-in scenario `name` (one of [`BUILTIN`]).
-    #[must_use]
-    pub fn builtin(name: &str) -> Option<Self> {
-        match name {
-            "square" => Some(Self::Square(SquareConfig::default())),
-            "square-ideal" => Some(Self::Square(SquareConfig::ideal())),
-            "wall45" => Some(Self::Wall45(Wall45Config::default())),
-            "tricycle-slip" => Some(Self::TricycleSlip(TricycleSlipConfig::default())),
-            "hover" => Some(Self::Hover(HoverConfig::default())),
-            _ => None,
-        }
-    }
-
     /// The kind's name in a scenario file (`square`).
     #[must_use]
     pub fn kind(&self) -> &'static str {
         match self {
-            Self::Square(_) => "square",
-            Self::Wall45(_) => "wall45",
-            Self::TricycleSlip(_) => "tricycle-slip",
-            Self::Hover(_) => "hover",
+            Self::Square(_) => Scenario::Square,
+            Self::Wall45(_) => Scenario::Wall45,
+            Self::TricycleSlip(_) => Scenario::TricycleSlip,
+            Self::Hover(_) => Scenario::Hover,
         }
+        .name()
     }
 
     /// `Ok(())` if every value is in its domain.
@@ -105,7 +172,8 @@ impl ScenarioConfig {
     pub fn validate(&self) -> Result<(), Invalid> {
         let invalid = |e: closed_loop::Error| Invalid {
             field: match e {
-                closed_loop::Error::Invalid { field, .. } => Some(field),
+                closed_loop::Error::Invalid { field, .. }
+                | closed_loop::Error::OutOfRange { field, .. } => Some(field),
                 _ => None,
             },
             message: e.to_string(),
@@ -345,7 +413,7 @@ pub fn parse(text: &str, path: &Path) -> Result<ScenarioConfig, FileError> {
             Some("scenario".into()),
             format!(
                 "missing top-level `scenario = \"KIND\"`; kinds: {}",
-                BUILTIN.join(", ")
+                Scenario::names()
             ),
         ));
     };
@@ -359,11 +427,11 @@ pub fn parse(text: &str, path: &Path) -> Result<ScenarioConfig, FileError> {
             ));
         }
     };
-    let Some(base) = ScenarioConfig::builtin(&kind) else {
+    let Ok(base) = kind.parse::<Scenario>().map(Scenario::config) else {
         return Err(invalid(
             Some(value.span()),
             Some("scenario".into()),
-            format!("unknown kind `{kind}`; kinds: {}", BUILTIN.join(", ")),
+            format!("unknown kind `{kind}`; kinds: {}", Scenario::names()),
         ));
     };
     // Blank `scenario = "..."` (same length: positions stay right).

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use locus_sim::closed_loop::{NoiseModel, SquareConfig};
-use locus_sim::scenario_file::{FileError, ScenarioConfig, load, parse};
+use locus_sim::scenario_file::{FileError, Scenario, ScenarioConfig, load, parse};
 
 fn scenarios_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios")
@@ -15,7 +15,8 @@ fn the_committed_examples_load_as_their_built_ins() {
     for name in ["square", "square-ideal"] {
         let path = scenarios_dir().join(format!("{name}.toml"));
         let cfg = load(&path).unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!(Some(cfg), ScenarioConfig::builtin(name), "{name}");
+        let builtin: Scenario = name.parse().expect("built-in");
+        assert_eq!(cfg, builtin.config(), "{name}");
     }
     // Every .toml under scenarios/ loads.
     let mut files = 0;
@@ -30,9 +31,34 @@ fn the_committed_examples_load_as_their_built_ins() {
 }
 
 #[test]
+fn every_scenario_name_round_trips() {
+    for s in Scenario::ALL {
+        assert_eq!(s.to_string().parse::<Scenario>(), Ok(s), "{s}");
+    }
+    let names: Vec<String> = Scenario::ALL.iter().map(ToString::to_string).collect();
+    assert_eq!(
+        names,
+        ["square", "square-ideal", "wall45", "tricycle-slip", "hover"]
+    );
+    let e = "circle".parse::<Scenario>().unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "unknown scenario `circle`; supported scenarios: square, square-ideal, wall45, tricycle-slip, hover"
+    );
+    // Each name gives its own kind of configuration.
+    for (s, kind) in
+        Scenario::ALL
+            .into_iter()
+            .zip(["square", "square", "wall45", "tricycle-slip", "hover"])
+    {
+        assert_eq!(s.config().kind(), kind, "{s}");
+    }
+}
+
+#[test]
 fn printed_configurations_load_back() {
     for name in ["square", "square-ideal"] {
-        let cfg = ScenarioConfig::builtin(name).expect("built-in");
+        let cfg = name.parse::<Scenario>().expect("built-in").config();
         let text = cfg.to_toml(name).expect("toml");
         assert_eq!(parse(&text, Path::new("x.toml")).expect("parse"), cfg);
     }
@@ -96,7 +122,12 @@ fn bad_files_name_the_line_column_and_field() {
         (3, 3, Some("control.v_ref")),
         "{msg}"
     );
-    assert!(msg.contains("must be in (0, 10] m/s"), "{msg}");
+    assert!(msg.contains("must be in [1e-2, 5e-1] m/s"), "{msg}");
+    // The shared limits (locus_models::settings): an IR noise the UI
+    // refuses is refused here too.
+    let (line, _, field, msg) = bad("scenario = \"square\"\nir_sigma = 0.2\n");
+    assert_eq!((line, field.as_deref()), (2, Some("ir_sigma")), "{msg}");
+    assert!(msg.contains("must be in [0e0, 1e-1] m"), "{msg}");
     let (line, _, field, msg) = bad("scenario = \"square\"\nq11 = 0.0\n");
     assert_eq!((line, field.as_deref()), (2, Some("q11")), "{msg}");
     // Unknown nested key.

@@ -92,7 +92,7 @@ fn live_r_changes_the_gain_and_a_bad_value_is_refused() {
     };
     assert!(matches!(
         sim.set_live(&bad),
-        Err(Error::Invalid { field: "q11", .. })
+        Err(Error::OutOfRange { field: "q11", .. })
     ));
     assert_eq!(sim.config().q11, cfg.q11);
 }

@@ -2,6 +2,15 @@
 //! usage error naming the flag before any work starts (clap reports
 //! `invalid value 'X' for '--flag <F>': ...` and exits with code 2):
 //! `--ellipse-sigma -1` used to be refused only after the whole run.
+//! The scenario argument of `run`, `serve`, `robot` and `host`
+//! ([`ScenarioArg`]) is parsed here too.
+
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+
+use clap::builder::{PossibleValue, TypedValueParser};
+use clap::error::ErrorKind;
+use locus_sim::scenario_file::{self, Scenario, ScenarioConfig, UnknownScenario};
 
 /// A finite number (not NaN, not infinite).
 ///
@@ -102,5 +111,81 @@ mod tests {
         assert!(count_at_most("11", 10).unwrap_err().contains("at most 10"));
         assert!(count_at_most("100000000000000000000000", 10).is_err());
         assert!(count_at_most("-1", 10).is_err());
+    }
+}
+
+/// A scenario argument: a built-in [`Scenario`] by name, or a TOML
+/// scenario file.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ScenarioArg {
+    /// A built-in scenario.
+    Builtin(Scenario),
+    /// A scenario file (`scenario = "KIND"` and overrides).
+    File(PathBuf),
+}
+
+impl core::fmt::Display for ScenarioArg {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Builtin(s) => s.fmt(f),
+            Self::File(p) => p.display().fmt(f),
+        }
+    }
+}
+
+impl ScenarioArg {
+    /// The built-in scenario or the file's (loaded and checked)
+    /// configuration.
+    ///
+    /// # Errors
+    /// The file cannot be read or is not a valid scenario file.
+    pub fn config(&self) -> anyhow::Result<ScenarioConfig> {
+        match self {
+            Self::Builtin(s) => Ok(s.config()),
+            Self::File(p) => Ok(scenario_file::load(p)?),
+        }
+    }
+}
+
+/// The value parser of a `SCENARIO|FILE` argument: a built-in name
+/// ([`Scenario`]'s, listed as the possible values in `--help`), or a path
+/// that ends in `.toml` or names a file.
+#[derive(Debug, Clone, Copy)]
+pub struct ScenarioParser;
+
+impl TypedValueParser for ScenarioParser {
+    type Value = ScenarioArg;
+
+    fn parse_ref(
+        &self,
+        cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &OsStr,
+    ) -> Result<ScenarioArg, clap::Error> {
+        let text = value.to_string_lossy();
+        if let Ok(s) = text.parse::<Scenario>() {
+            return Ok(ScenarioArg::Builtin(s));
+        }
+        let path = Path::new(value);
+        if path.extension().is_some_and(|e| e == "toml") || path.is_file() {
+            return Ok(ScenarioArg::File(path.to_path_buf()));
+        }
+        let what = arg.map_or_else(|| "SCENARIO".to_string(), ToString::to_string);
+        Err(clap::Error::raw(
+            ErrorKind::InvalidValue,
+            format!(
+                "{what}: {}, or a scenario file FILE.toml\n",
+                UnknownScenario(text.into_owned())
+            ),
+        )
+        .with_cmd(cmd))
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        Some(Box::new(
+            Scenario::ALL
+                .into_iter()
+                .map(|s| PossibleValue::new(s.name())),
+        ))
     }
 }

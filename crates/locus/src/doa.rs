@@ -3,14 +3,14 @@
 //! shards. Outputs `doa.csv` (or `doa-shard-I-of-N.csv`), heatmaps of
 //! `M_zeta` and of the settling time (PNG and SVG, in the manner of the
 //! paper's Fig. 4 and 5) and a summary table. The maths is in
-//! `locus_analysis::doa`.
+//! `locus_doa`.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow};
 use clap::Subcommand;
-use locus_analysis::doa::{CellResult, DoaConfig, DoaResult, Shard, Study, merge};
+use locus_doa::{CellResult, DoaConfig, DoaResult, Shard, Study, merge};
 use plotters::prelude::*;
 
 use crate::font::{self, FAMILY};
@@ -169,7 +169,7 @@ fn run_merge(args: &MergeArgs) -> Result<()> {
 
 /// Largest shard file read (bytes): a line per cell, under 200 bytes each,
 /// for at most `MAX_GRID_CELLS` cells.
-const MAX_SHARD_BYTES: u64 = 200 * locus_analysis::doa::MAX_GRID_CELLS as u64;
+const MAX_SHARD_BYTES: u64 = 200 * locus_doa::MAX_GRID_CELLS as u64;
 
 /// Axis values of a whole-grid result: (v_g by row, alpha by column).
 fn axes(result: &DoaResult) -> (Vec<f64>, Vec<f64>) {

@@ -9,7 +9,7 @@ use clap::Args as ClapArgs;
 use comfy_table::Table;
 use locus_net::host::{HostStep, run_host, run_host_over};
 use locus_net::transport::Serial;
-use locus_sim::link_robot::host_config;
+use locus_simlink::host_config;
 
 use crate::link_scenario::square_config;
 
@@ -36,8 +36,8 @@ pub struct Args {
     baud: u32,
     /// `square` or a scenario file whose `scenario = "square"` (the robot's
     /// geometry, the filter's Q and R, the controller).
-    #[arg(default_value = "square", value_name = "SCENARIO|FILE")]
-    scenario: String,
+    #[arg(default_value = "square", value_name = "SCENARIO|FILE", value_parser = crate::args::ScenarioParser)]
+    scenario: crate::args::ScenarioArg,
     /// Print every applied packet's estimate (robot time, x, y, theta).
     #[arg(long)]
     verbose: bool,

@@ -1,5 +1,5 @@
 //! `locus hw`: the cycle-level model of papers 000/003's FPGA correction core
-//! (`locus_analysis::hw`) on one correction of paper 000's laser model:
+//! (`locus_hw`) on one correction of paper 000's laser model:
 //! cycles and time per correction beside the paper's 2.08 us, the operators
 //! the schedule needs beside the paper's 9 adders, 9 multipliers and 4
 //! dividers, cycles per FSM state, and a table over 1..9 datapaths for the
@@ -7,9 +7,9 @@
 
 use anyhow::{Result, anyhow};
 use clap::ValueEnum;
-use locus_analysis::hw::{self, CoreInputs, CoreRun, HwConfig, Latencies, Schedule};
 use locus_core::nalgebra::{Matrix3, Vector3};
 use locus_core::{Belief, CovarianceUpdate, Ekf, MeasurementModel};
+use locus_hw::{self as hw, CoreInputs, CoreRun, HwConfig, Latencies, Schedule};
 use locus_models::{LaserMount, LaserWallPaper, WallLine};
 
 use crate::table::with_header;
@@ -148,7 +148,7 @@ pub fn run(args: &Args) -> Result<()> {
     cfg.validate()?;
     if let Some(dir) = &args.export_vectors {
         let built = HwConfig {
-            latencies: locus_analysis::hdl::built_latencies()?,
+            latencies: locus_hw::hdl::built_latencies()?,
             ..cfg
         };
         let e = crate::hw_rtl::export(dir, args.unit_vectors, args.core_vectors, &built)?;

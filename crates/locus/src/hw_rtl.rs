@@ -6,9 +6,9 @@
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
-use locus_analysis::hdl::ekf_core::{self, CoreSim};
-use locus_analysis::hdl::fp32::{self, Op};
-use locus_analysis::hw::{self, CoreInputs, HwConfig, Schedule};
+use locus_hw::hdl::ekf_core::{self, CoreSim};
+use locus_hw::hdl::fp32::{self, Op};
+use locus_hw::{self as hw, CoreInputs, HwConfig, Schedule};
 
 use crate::table::with_header;
 use locus_sim::wall45::{Wall45Config, run_wall45};
@@ -152,7 +152,7 @@ fn write_all(dir: &Path, units: usize, corrections: usize, cfg: &HwConfig) -> Re
 /// The latency header cannot be read; a model error.
 #[allow(clippy::cast_precision_loss)]
 pub fn print_simulated(inputs: &CoreInputs, clock_mhz: f64) -> Result<()> {
-    let latencies = locus_analysis::hdl::built_latencies()?;
+    let latencies = locus_hw::hdl::built_latencies()?;
     let cfg = HwConfig {
         latencies,
         clock_hz: clock_mhz * 1e6,

@@ -7,7 +7,7 @@ use std::net::UdpSocket;
 use anyhow::Context;
 use clap::Args as ClapArgs;
 use locus_net::transport::Serial;
-use locus_sim::link_robot::{RobotConfig, run_robot, run_robot_over};
+use locus_simlink::{RobotConfig, run_robot, run_robot_over};
 
 use crate::link_scenario::square_config;
 
@@ -29,8 +29,8 @@ pub struct Args {
     #[arg(long, default_value_t = 115_200, value_parser = crate::args::baud)]
     baud: u32,
     /// `square` or a scenario file whose `scenario = "square"`.
-    #[arg(default_value = "square", value_name = "SCENARIO|FILE")]
-    scenario: String,
+    #[arg(default_value = "square", value_name = "SCENARIO|FILE", value_parser = crate::args::ScenarioParser)]
+    scenario: crate::args::ScenarioArg,
     /// Seed of the simulation's random numbers.
     #[arg(long, default_value_t = 1)]
     seed: u64,

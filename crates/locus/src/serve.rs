@@ -2,9 +2,11 @@
 
 use core::net::SocketAddr;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
-use locus_sim::scenario_file::{self, BUILTIN, ScenarioConfig};
+use locus_sim::scenario_file::ScenarioConfig;
+
+use crate::args::{ScenarioArg, ScenarioParser};
 
 /// Arguments of `locus serve`.
 #[derive(ClapArgs, Debug)]
@@ -12,8 +14,8 @@ pub struct Args {
     /// Scenario each session starts from: `square`, `square-ideal`, or a
     /// TOML scenario file with `scenario = "square"` (the page can switch
     /// between the two built-ins and load the guide's steps a to f).
-    #[arg(default_value = "square")]
-    scenario: String,
+    #[arg(default_value = "square", value_name = "SCENARIO|FILE", value_parser = ScenarioParser)]
+    scenario: ScenarioArg,
     /// Address to listen on. The default is the loopback interface only:
     /// anyone who can reach the port can drive the simulation, so give
     /// another address (e.g. 0.0.0.0:8080) only on a network you trust.
@@ -42,21 +44,10 @@ pub struct Args {
     baud: u32,
 }
 
-/// The square-kind configuration of `arg` (a built-in name or a file).
-fn scenario(arg: &str) -> Result<(String, locus_sim::SquareConfig)> {
-    let (name, cfg) = if let Some(cfg) = ScenarioConfig::builtin(arg) {
-        (arg.to_string(), cfg)
-    } else if std::path::Path::new(arg).is_file() {
-        (
-            arg.to_string(),
-            scenario_file::load(std::path::Path::new(arg))?,
-        )
-    } else {
-        bail!(
-            "unknown scenario `{arg}`; built-in: {}, or a scenario file FILE.toml",
-            BUILTIN.join(", ")
-        );
-    };
+/// The square-kind configuration of `arg` (a built-in or a file) and its
+/// name.
+fn scenario(arg: &ScenarioArg) -> Result<(String, locus_sim::SquareConfig)> {
+    let (name, cfg) = (arg.to_string(), arg.config()?);
     match cfg {
         ScenarioConfig::Square(c) => Ok((name, c)),
         other => Err(locus_serve::Error::Scenario(other.kind().to_string()).into()),
@@ -79,7 +70,7 @@ pub fn run(args: &Args) -> Result<()> {
                 locus_serve::robot::Link::udp(args.bind, robot)
                     .with_context(|| format!("binding UDP {}", args.bind))?
             };
-            let mut host = locus_sim::link_robot::host_config(&cfg);
+            let mut host = locus_simlink::host_config(&cfg);
             // A live session: the path repeats until the page stops it.
             host.laps = usize::MAX;
             Some(locus_serve::robot::Attached::start(

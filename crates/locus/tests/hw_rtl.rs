@@ -7,8 +7,8 @@
 
 use std::process::Command;
 
-use locus_analysis::hdl::ekf_core::{CoreSim, CoreSimReport};
-use locus_analysis::hw::{self, HwConfig, Schedule};
+use locus_hw::hdl::ekf_core::{CoreSim, CoreSimReport};
+use locus_hw::{self as hw, HwConfig, Schedule};
 
 fn locus(args: &[&str]) -> String {
     let out = Command::new(env!("CARGO_BIN_EXE_locus"))
@@ -26,10 +26,10 @@ fn locus(args: &[&str]) -> String {
 /// The model's cycles per correction with the units' latencies.
 fn model_cycles() -> u64 {
     let cfg = HwConfig {
-        latencies: locus_analysis::hdl::built_latencies().unwrap(),
+        latencies: locus_hw::hdl::built_latencies().unwrap(),
         ..HwConfig::default()
     };
-    let inp = locus_analysis::hdl::ekf_core::random_inputs(1, 1)[0];
+    let inp = locus_hw::hdl::ekf_core::random_inputs(1, 1)[0];
     hw::run(&cfg, Schedule::Inverse2x2, &inp).unwrap().cycles
 }
 

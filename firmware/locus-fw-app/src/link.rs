@@ -4,7 +4,7 @@
 //! [`FrameDecoder`] and the protocol's [`Receiver`]. No allocation, no I/O:
 //! the firmware binary (`locus-fw-link`) moves the bytes over its UART.
 //!
-//! What a step sends is what `locus_sim::link_robot` (the simulated robot
+//! What a step sends is what `locus_simlink` (the simulated robot
 //! endpoint) sends: telemetry `k` after step `k` (telemetry 0 before the
 //! first step: time 0, counts 0, no reading), sequence `k`, robot time
 //! `k dt`, the encoder counts and the IR pair's reading when both sensors

@@ -62,7 +62,9 @@ impl HostConfig {
     /// Checks the values the host relies on.
     ///
     /// # Errors
-    /// [`Error::Config`] naming the first invalid value.
+    /// [`Error::Config`] naming the first invalid value;
+    /// [`Error::OutOfRange`] for a setting outside its range of
+    /// [`locus_models::settings`].
     pub fn validate(&self) -> Result<(), Error> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
         let l = &self.localiser;
@@ -83,7 +85,37 @@ impl HostConfig {
             return Err(Error::Config(what));
         }
         self.limits.validate().map_err(Error::Config)?;
-        l.validate().map_err(localiser_error)
+        l.validate().map_err(localiser_error)?;
+        within_settings(l, c)
+    }
+}
+
+/// `Ok(())` if the user's settings among `l` and `c` (`Q`, `R`, the gate,
+/// the controller's speeds and gains) are within their ranges of
+/// [`locus_models::settings`].
+///
+/// # Errors
+/// [`Error::OutOfRange`] for the first that is not.
+pub(super) fn within_settings(
+    l: &LocaliserConfig<f64>,
+    c: &locus_control::Config,
+) -> Result<(), Error> {
+    use locus_models::settings as s;
+    let table = [
+        (s::Q11, l.q11),
+        (s::Q22, l.q22),
+        (s::R11, l.r11),
+        (s::R22, l.r22),
+        (s::GATE, l.gate_confidence.unwrap_or(0.0)),
+        (s::V_REF, c.v_ref),
+        (s::W_REF, c.w_ref),
+        (s::K_CROSS, c.k_cross),
+        (s::K_HEADING, c.k_heading),
+        (s::K_POS, c.k_pos),
+    ];
+    match table.into_iter().find(|(limit, v)| !limit.contains(*v)) {
+        Some((limit, value)) => Err(Error::OutOfRange { limit, value }),
+        None => Ok(()),
     }
 }
 

@@ -6,7 +6,7 @@
 //! pair, `Q`, `R`, gate, initial belief); the IR pair is associated with
 //! the arena walls the caller gives, and the path controller
 //! ([`FollowPath::square`]) drives the laps. The host knows nothing of the
-//! robot beyond the protocol: a simulator (`locus_sim::link_robot`) or a
+//! robot beyond the protocol: a simulator (`locus_simlink`) or a
 //! real robot.
 //!
 //! # Loop
@@ -43,7 +43,7 @@ mod config;
 mod run;
 
 pub use config::{COUNTER_BITS, HostConfig};
-use config::{control_ok, localiser_error};
+use config::{control_ok, localiser_error, within_settings};
 pub use run::{HostReport, LiveTick, run_host, run_host_live, run_host_over};
 
 use locus_control::{Controller, FollowPath, Twist, wheel_speeds};
@@ -268,7 +268,9 @@ impl Host {
     /// and corrections use the new values.
     ///
     /// # Errors
-    /// [`Error::Config`] if a value is not finite and > 0; nothing changes.
+    /// [`Error::Config`] if a value is not finite and > 0,
+    /// [`Error::OutOfRange`] if outside its range of
+    /// [`locus_models::settings`]; nothing changes.
     pub fn set_noise(&mut self, q11: f64, q22: f64, r11: f64, r22: f64) -> Result<(), Error> {
         self.retune(LocaliserConfig {
             q11,
@@ -283,8 +285,9 @@ impl Host {
     /// (0, 1), or `None` for no gate; from the next packet on.
     ///
     /// # Errors
-    /// [`Error::Config`] if the confidence is outside (0, 1); nothing
-    /// changes.
+    /// [`Error::Config`] if the confidence is outside (0, 1),
+    /// [`Error::OutOfRange`] if above [`locus_models::settings::GATE`];
+    /// nothing changes.
     pub fn set_gate(&mut self, confidence: Option<f64>) -> Result<(), Error> {
         self.retune(LocaliserConfig {
             gate_confidence: confidence,
@@ -303,12 +306,14 @@ impl Host {
     /// place on the path.
     ///
     /// # Errors
-    /// [`Error::Config`] if a value is not finite and > 0; nothing
-    /// changes.
+    /// [`Error::Config`] if a value is not finite and > 0,
+    /// [`Error::OutOfRange`] if a speed or gain is outside its range of
+    /// [`locus_models::settings`]; nothing changes.
     pub fn set_control(&mut self, control: locus_control::Config) -> Result<(), Error> {
         if !control_ok(&control) {
             return Err(Error::Config("control values must be finite and > 0"));
         }
+        within_settings(&self.cfg.localiser, &control)?;
         self.controller.set_config(control);
         self.cfg.control = control;
         Ok(())
@@ -364,6 +369,7 @@ impl Host {
     /// belief, odometer reference and NIS monitor are kept.
     fn retune(&mut self, l: LocaliserConfig<f64>) -> Result<(), Error> {
         let fresh = l.localiser().map_err(localiser_error)?;
+        within_settings(&l, &self.cfg.control)?;
         self.localiser.filter.set_rules(*fresh.filter.rules());
         self.localiser.model = fresh.model;
         self.localiser.ir = fresh.ir;

@@ -1,9 +1,8 @@
 //! The pages' commands to the host thread, checked before they reach it.
 
 use locus_net::host::Host;
-use serde_json::{Map, Value};
 
-use crate::params::{self, Invalid};
+use crate::params::{self, Invalid, ParamPatch};
 use crate::protocol::ClientMsg;
 
 /// A page's command to the host thread, validated.
@@ -29,77 +28,32 @@ pub enum Command {
     Settings(Settings),
 }
 
-/// Live settings from the page: the fields given, each already within
-/// [`params::LIMITS`].
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Settings {
-    /// `Q11` (m^2 per step).
-    pub q11: Option<f64>,
-    /// `Q22` (rad^2 per step).
-    pub q22: Option<f64>,
-    /// `R11` (m^2).
-    pub r11: Option<f64>,
-    /// `R22` (m^2).
-    pub r22: Option<f64>,
-    /// Whether the filter uses the IR readings.
-    pub use_ir: Option<bool>,
-    /// Gate confidence (0: no gate).
-    pub gate: Option<f64>,
-    /// `V_ref` (m/s).
-    pub v_ref: Option<f64>,
-    /// `W_ref` (rad/s).
-    pub w_ref: Option<f64>,
-    /// Cross-track gain (rad/m).
-    pub k_cross: Option<f64>,
-    /// Heading gain (1/s).
-    pub k_heading: Option<f64>,
-    /// Position gain (1/s).
-    pub k_pos: Option<f64>,
+pub use crate::params::Settings;
+
+/// The live settings of `values` for a robot: the patch checked, and
+/// `ir_sigma` (the simulator's injected noise) refused.
+///
+/// # Errors
+/// [`Invalid`] naming the first bad field.
+pub fn robot_settings(values: &ParamPatch) -> Result<Settings, Invalid> {
+    let s = values.checked()?;
+    if s.ir_sigma.is_some() {
+        return Err(Invalid::new(
+            "ir_sigma",
+            "is the simulator's injected noise: a robot's IR noise is its own",
+        ));
+    }
+    Ok(s)
 }
 
 impl Settings {
-    /// The settings in `values` (the `params` message's fields), each
-    /// checked against its limit; all or nothing.
-    ///
-    /// # Errors
-    /// [`Invalid`] naming the first bad field; `ir_sigma` (the
-    /// simulator's injected noise) and unknown fields are refused.
-    pub fn parse(values: &Map<String, Value>) -> Result<Self, Invalid> {
-        let mut s = Self::default();
-        for (key, value) in values {
-            let num = || params::checked(key, value).map(Some);
-            match key.as_str() {
-                "q11" => s.q11 = num()?,
-                "q22" => s.q22 = num()?,
-                "r11" => s.r11 = num()?,
-                "r22" => s.r22 = num()?,
-                "gate" => s.gate = num()?,
-                "v_ref" => s.v_ref = num()?,
-                "w_ref" => s.w_ref = num()?,
-                "k_cross" => s.k_cross = num()?,
-                "k_heading" => s.k_heading = num()?,
-                "k_pos" => s.k_pos = num()?,
-                "use_ir" => s.use_ir = Some(params::boolean(key, value)?),
-                "ir_sigma" => {
-                    return Err(Invalid::new(
-                        key,
-                        "is the simulator's injected noise: a robot's IR noise is its own",
-                    ));
-                }
-                _ => return Err(Invalid::new(key, "is not a live parameter")),
-            }
-        }
-        Ok(s)
-    }
-
     /// Applies the settings to `host` from its next packet on. Values
     /// within [`params::LIMITS`] are always accepted (every limit is
     /// inside the host's domain), so a patch is applied whole.
     ///
     /// # Errors
-    /// The host's [`locus_net::Error::Config`] for a value outside its
-    /// domain (the noise, then the gate, then the controller are set in
-    /// that order).
+    /// The host's [`locus_net::Error`] for a value outside its domain (the
+    /// noise, then the gate, then the controller are set in that order).
     pub fn apply(&self, host: &mut Host) -> Result<(), locus_net::Error> {
         let c = *host.config();
         let l = c.localiser;
@@ -153,7 +107,7 @@ pub fn command(msg: ClientMsg) -> Result<Command, Invalid> {
             w: params::checked("teleop_w", &w)?,
         }),
         ClientMsg::TeleopOff {} => Ok(Command::TeleopOff),
-        ClientMsg::Params { values } => Settings::parse(&values).map(Command::Settings),
+        ClientMsg::Params { values } => robot_settings(&values).map(Command::Settings),
         ClientMsg::Step {} => unavailable("step"),
         ClientMsg::StepCorrection {} => Ok(Command::NextCorrection),
         ClientMsg::Reset {} => unavailable("reset"),
@@ -168,18 +122,18 @@ pub fn command(msg: ClientMsg) -> Result<Command, Invalid> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_json::json;
+    use serde_json::{Value, json};
 
     use crate::robot::UNAVAILABLE;
 
     fn host() -> Host {
-        let mut cfg = locus_sim::link_robot::host_config(&locus_sim::SquareConfig::default());
+        let mut cfg = locus_simlink::host_config(&locus_sim::SquareConfig::default());
         cfg.laps = usize::MAX;
         Host::new(&cfg).unwrap()
     }
 
-    fn values(v: &Value) -> Map<String, Value> {
-        v.as_object().unwrap().clone()
+    fn values(v: Value) -> ParamPatch {
+        serde_json::from_value(v).unwrap()
     }
 
     #[test]
@@ -189,18 +143,18 @@ mod tests {
             (json!({"r11": 1e-3, "q22": "1e999"}), "q22"),
             (json!({"gate": 1.5}), "gate"),
             (json!({"use_ir": "maybe"}), "use_ir"),
-            (json!({"start_x": 0.1}), "start_x"),
+            (json!({"q11": null}), "q11"),
         ] {
             assert_eq!(
-                Settings::parse(&values(&v)).unwrap_err().field,
+                robot_settings(&values(v.clone())).unwrap_err().field,
                 field,
                 "{v}"
             );
         }
         let mut h = host();
         let before = *h.config();
-        let s = Settings::parse(&values(
-            &json!({"r22": "4e-4", "gate": 0, "use_ir": false, "k_pos": 2}),
+        let s = robot_settings(&values(
+            json!({"r22": "4e-4", "gate": 0, "use_ir": false, "k_pos": 2}),
         ))
         .unwrap();
         s.apply(&mut h).unwrap();
@@ -214,6 +168,20 @@ mod tests {
         assert!(!c.use_ir);
         assert_eq!(c.control.k_pos, 2.0);
         assert_eq!(c.control.v_ref, before.control.v_ref);
+    }
+
+    /// An unknown key is refused when the message is read, naming it: the
+    /// host thread never sees it.
+    #[test]
+    fn an_unknown_key_is_refused_naming_it() {
+        for key in ["start_x", "q12", "speed"] {
+            let text = json!({"type": "params", "values": {"r11": 1e-3, key: 1}});
+            let e = serde_json::from_value::<ClientMsg>(text).unwrap_err();
+            assert!(
+                e.to_string().contains(&format!("unknown field `{key}`")),
+                "{key}: {e}"
+            );
+        }
     }
 
     #[test]

@@ -246,12 +246,7 @@ impl Attached {
     pub fn handle_text(&self, text: &str) -> Vec<ServerMsg> {
         let msg = match serde_json::from_str::<ClientMsg>(text) {
             Ok(m) => m,
-            Err(e) => {
-                return vec![ServerMsg::Error {
-                    field: "message".into(),
-                    message: format!("not a valid message: {e}"),
-                }];
-            }
+            Err(e) => return vec![crate::protocol::unreadable(&e)],
         };
         match command(msg) {
             Ok(c) => {

@@ -15,7 +15,7 @@ pub mod load;
 /// and controller, laps without end), on an ephemeral loopback port in
 /// the current runtime; returns its address.
 pub async fn start_robot_server(robot: SocketAddr) -> SocketAddr {
-    let mut cfg = locus_sim::link_robot::host_config(&locus_sim::SquareConfig::default());
+    let mut cfg = locus_simlink::host_config(&locus_sim::SquareConfig::default());
     cfg.laps = usize::MAX;
     let link = locus_serve::robot::Link::udp("127.0.0.1:0".parse().unwrap(), robot).unwrap();
     let attached =
@@ -38,7 +38,7 @@ pub async fn start_robot_server(robot: SocketAddr) -> SocketAddr {
 pub fn spawn_robot(time_scale: f64) -> std::net::SocketAddr {
     let socket = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
     let addr = socket.local_addr().unwrap();
-    let cfg = locus_sim::link_robot::RobotConfig {
+    let cfg = locus_simlink::RobotConfig {
         square: locus_sim::SquareConfig {
             max_time: 5000.0,
             ..locus_sim::SquareConfig::default()
@@ -47,9 +47,9 @@ pub fn spawn_robot(time_scale: f64) -> std::net::SocketAddr {
         // Generous for a loaded machine: the host answers every packet.
         idle_exit: 30.0,
         handshake: std::time::Duration::from_secs(60),
-        ..locus_sim::link_robot::RobotConfig::default()
+        ..locus_simlink::RobotConfig::default()
     };
-    std::thread::spawn(move || locus_sim::link_robot::run_robot(&socket, &cfg));
+    std::thread::spawn(move || locus_simlink::run_robot(&socket, &cfg));
     addr
 }
 

@@ -2,6 +2,8 @@
 //! 3), its scenario-file form (serde, with the controller's `[control]`
 //! table and the `"none"` gate) and its validation.
 
+use locus_models::settings;
+
 use super::Error;
 use crate::scenario_file::{MAX_STEPS, within};
 
@@ -223,18 +225,22 @@ impl SquareConfig {
         }
     }
 
-    /// `Ok(())` if every value is in its domain.
+    /// `Ok(())` if every value is in its domain: the settings a user may
+    /// also change live (`Q`, `R`, `ir_sigma`, the gate, the controller's
+    /// speeds and gains, the initial belief) in their ranges of
+    /// [`locus_models::settings`], every other field in its plausible
+    /// range.
     ///
     /// # Errors
-    /// [`Error::Invalid`] naming the first bad field (as in a scenario
-    /// file).
+    /// [`Error::Invalid`] or [`Error::OutOfRange`] naming the first bad
+    /// field (as in a scenario file).
     pub fn validate(&self) -> Result<(), Error> {
         // Plausible ranges (SI): a value outside is refused before a run,
         // naming the field; the guide's tiny and huge Q and R are inside.
         let pos = |v: f64| v.is_finite() && v > 0.0;
         let range = |r: (f64, f64)| r.0.is_finite() && r.1.is_finite() && r.0 <= r.1;
         let c = &self.control;
-        let checks: [(bool, &'static str, &'static str); 29] = [
+        let checks: [(bool, &'static str, &'static str); 17] = [
             (
                 within(self.dt, 1e-4, 1.0),
                 "dt",
@@ -296,24 +302,9 @@ impl SquareConfig {
                 "must be [min, max] with 0 < min <= max <= 10",
             ),
             (
-                self.start.iter().all(|v| within(*v, -100.0, 100.0)),
-                "start",
-                "must be in [-100, 100] (m, m, rad)",
-            ),
-            (
-                self.initial_std.iter().all(|v| pos(*v) && *v <= 10.0),
-                "initial_std",
-                "must be in (0, 10] (m, m, rad)",
-            ),
-            (
                 pos(self.ir_spacing) && self.ir_spacing <= 1.0,
                 "ir_spacing",
                 "must be in (0, 1] m",
-            ),
-            (
-                within(self.ir_sigma, 0.0, 1.0),
-                "ir_sigma",
-                "must be in [0, 1] m",
             ),
             (
                 pos(self.association_range) && self.association_range <= 10.0,
@@ -321,55 +312,9 @@ impl SquareConfig {
                 "must be in (0, 10] m",
             ),
             (
-                within(self.q11, 1e-16, 10.0),
-                "q11",
-                "must be in [1e-16, 10] m^2",
-            ),
-            (
-                within(self.q22, 1e-16, 1e5),
-                "q22",
-                "must be in [1e-16, 1e5] rad^2",
-            ),
-            (
-                within(self.r11, 1e-12, 1.0),
-                "r11",
-                "must be in [1e-12, 1] m^2",
-            ),
-            (
-                within(self.r22, 1e-12, 1.0),
-                "r22",
-                "must be in [1e-12, 1] m^2",
-            ),
-            (
-                self.gate_confidence
-                    .is_none_or(|g| g.is_finite() && g > 0.0 && g < 1.0),
+                self.gate_confidence.is_none_or(|g| g > 0.0),
                 "gate_confidence",
-                "must be in (0, 1) or \"none\"",
-            ),
-            (
-                pos(c.v_ref) && c.v_ref <= 10.0,
-                "control.v_ref",
-                "must be in (0, 10] m/s",
-            ),
-            (
-                pos(c.w_ref) && c.w_ref <= 100.0,
-                "control.w_ref",
-                "must be in (0, 100] rad/s",
-            ),
-            (
-                pos(c.k_cross) && c.k_cross <= 1e3,
-                "control.k_cross",
-                "must be in (0, 1000] rad/m",
-            ),
-            (
-                pos(c.k_heading) && c.k_heading <= 1e3,
-                "control.k_heading",
-                "must be in (0, 1000] 1/s",
-            ),
-            (
-                pos(c.k_pos) && c.k_pos <= 1e3,
-                "control.k_pos",
-                "must be in (0, 1000] 1/s",
+                "must be > 0 or \"none\" (no gate)",
             ),
             (
                 pos(c.pos_tol) && c.pos_tol <= 10.0,
@@ -382,8 +327,41 @@ impl SquareConfig {
                 "must be in (0, 4] rad",
             ),
         ];
-        match checks.iter().find(|(ok, _, _)| !ok) {
-            Some(&(_, field, reason)) => Err(Error::Invalid { field, reason }),
+        if let Some(&(_, field, reason)) = checks.iter().find(|(ok, _, _)| !ok) {
+            return Err(Error::Invalid { field, reason });
+        }
+        // The settings a user may also change live: the one table the
+        // teaching UI and the host check too.
+        let (s, sd) = (self.start, self.initial_std);
+        let table = [
+            ("start", settings::START_X, s[0]),
+            ("start", settings::START_Y, s[1]),
+            ("start", settings::START_THETA, s[2]),
+            ("initial_std", settings::STD_X, sd[0]),
+            ("initial_std", settings::STD_Y, sd[1]),
+            ("initial_std", settings::STD_THETA, sd[2]),
+            ("ir_sigma", settings::IR_SIGMA, self.ir_sigma),
+            ("q11", settings::Q11, self.q11),
+            ("q22", settings::Q22, self.q22),
+            ("r11", settings::R11, self.r11),
+            ("r22", settings::R22, self.r22),
+            (
+                "gate_confidence",
+                settings::GATE,
+                self.gate_confidence.unwrap_or(0.0),
+            ),
+            ("control.v_ref", settings::V_REF, c.v_ref),
+            ("control.w_ref", settings::W_REF, c.w_ref),
+            ("control.k_cross", settings::K_CROSS, c.k_cross),
+            ("control.k_heading", settings::K_HEADING, c.k_heading),
+            ("control.k_pos", settings::K_POS, c.k_pos),
+        ];
+        match table.into_iter().find(|(_, l, v)| !l.contains(*v)) {
+            Some((field, limit, value)) => Err(Error::OutOfRange {
+                field,
+                limit,
+                value,
+            }),
             None => Ok(()),
         }
     }

@@ -16,18 +16,19 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 use locus_core::wrap_angle;
 use locus_eval::{Record, Sample, Summary};
 use locus_models::laser_wall::Segment;
 use locus_sim::closed_loop::{SquareConfig, run_square};
 use locus_sim::hover::run_hover;
-use locus_sim::scenario_file::{self, BUILTIN, ScenarioConfig};
+use locus_sim::scenario_file::ScenarioConfig;
 use locus_sim::tricycle_slip::{TricycleSlipRecord, room, run_tricycle_slip};
 use locus_sim::wall45::run_wall45;
 
 pub(crate) use self::monte_carlo::seeds;
+use crate::args::ScenarioArg;
 use crate::metrics::{self, RunMetrics, Settings};
 use crate::output::print_out;
 use crate::plot::PictureArgs;
@@ -46,8 +47,8 @@ pub struct RunArgs {
     /// `square-ideal` (noise exactly as the filter's Q and R assume), or a
     /// scenario file `FILE.toml` whose `scenario = "square"` picks the kind
     /// and whose other keys override its defaults (see `--print-config`).
-    #[arg(default_value = "square", value_name = "SCENARIO|FILE")]
-    scenario: String,
+    #[arg(default_value = "square", value_name = "SCENARIO|FILE", value_parser = crate::args::ScenarioParser)]
+    scenario: ScenarioArg,
     /// Print the scenario's complete configuration as a TOML scenario file
     /// (a template: every key, SI units) and exit without running.
     #[arg(long)]
@@ -156,22 +157,14 @@ fn square_info(name: &str, cfg: &SquareConfig) -> Info {
 
 /// The scenario named on the command line: its name (a built-in name, or
 /// the file's stem) and configuration.
-fn resolve(arg: &str) -> Result<(String, ScenarioConfig)> {
-    if let Some(cfg) = ScenarioConfig::builtin(arg) {
-        return Ok((arg.to_string(), cfg));
-    }
-    let path = Path::new(arg);
-    if path.extension().is_some_and(|e| e == "toml") || path.is_file() {
-        let cfg = scenario_file::load(path)?;
-        let name = path
+fn resolve(arg: &ScenarioArg) -> Result<(String, ScenarioConfig)> {
+    let name = match arg {
+        ScenarioArg::Builtin(s) => s.to_string(),
+        ScenarioArg::File(path) => path
             .file_stem()
-            .map_or_else(|| "file".to_string(), |s| s.to_string_lossy().into_owned());
-        return Ok((name, cfg));
-    }
-    bail!(
-        "unknown scenario `{arg}`; supported scenarios: {}, or a scenario file FILE.toml",
-        BUILTIN.join(", ")
-    )
+            .map_or_else(|| "file".to_string(), |s| s.to_string_lossy().into_owned()),
+    };
+    Ok((name, arg.config()?))
 }
 
 /// Runs the scenario named in `args`, writing the log as it goes, then
@@ -179,10 +172,9 @@ fn resolve(arg: &str) -> Result<(String, ScenarioConfig)> {
 pub fn run(args: &RunArgs) -> Result<()> {
     let (name, config) = resolve(&args.scenario)?;
     if args.print_config {
-        let kind = if BUILTIN.contains(&args.scenario.as_str()) {
-            args.scenario.as_str()
-        } else {
-            config.kind()
+        let kind = match args.scenario {
+            ScenarioArg::Builtin(s) => s.name(),
+            ScenarioArg::File(_) => config.kind(),
         };
         return print_out(&config.to_toml(kind)?);
     }

@@ -15,7 +15,7 @@
 //! # Loop
 //! 1. Wait up to [`HANDSHAKE_S`] for a first valid command (the host sends
 //!    zero-speed commands until its first telemetry), as
-//!    `locus_sim::link_robot` does: nothing is sent before someone listens.
+//!    `locus_simlink` does: nothing is sent before someone listens.
 //! 2. Send telemetry 0 (time 0, counts 0, no reading).
 //! 3. For each recorded step `k = 1..=3000`: run the step (decode, predict,
 //!    IR correction, odometry, checksum), send telemetry `k`, print the

@@ -6,8 +6,8 @@
 use core::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use locus_analysis::doa::{DoaConfig, Study, vertex};
 use locus_core::MeasurementModel;
+use locus_doa::{DoaConfig, Study, vertex};
 use locus_models::observer::ObserverState;
 
 fn bench(c: &mut Criterion) {

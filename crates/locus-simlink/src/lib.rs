@@ -1,7 +1,11 @@
-//! The `square` simulator as a robot endpoint of the UDP link
-//! (`docs/protocol.md`; the host is [`locus_net::host`]).
+//! The `square` simulator as a robot endpoint of the link
+//! (`docs/protocol.md`; the host is [`locus_net::host`]): `locus robot`.
 //!
-//! The robot is built exactly as [`crate::closed_loop::run_square`]
+//! A crate of its own so that neither end depends on the other: the
+//! simulator (`locus-sim`) knows nothing of the link's transports and the
+//! host (`locus-net`) nothing of the simulator; this crate joins them.
+//!
+//! The robot is built exactly as [`locus_sim::closed_loop::run_square`]
 //! builds it (same random draws in the same order from the same seed: true
 //! start, slip bumps, then per step the right and left encoders and the IR
 //! pair), so a run through the link with every command on time drives the
@@ -33,10 +37,10 @@ use locus_odometry::{Wheel as EncoderWheel, wrapping_diff};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 
-use crate::closed_loop::{Error as SimError, NoiseModel, SquareConfig};
-use crate::robot::{DriveCommand, Pose, Robot};
-use crate::sensors::{Encoder, IrPairSensor, SharpIr};
-use crate::world::World;
+use locus_sim::closed_loop::{Error as SimError, NoiseModel, SquareConfig};
+use locus_sim::robot::{DriveCommand, Pose, Robot};
+use locus_sim::sensors::{Encoder, IrPairSensor, SharpIr};
+use locus_sim::world::World;
 
 /// Errors of the robot endpoint.
 #[derive(Debug, thiserror::Error)]

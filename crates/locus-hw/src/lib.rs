@@ -46,8 +46,16 @@
 //!
 //! The arithmetic is executed in `f32` in the schedule's order (products
 //! accumulated left to right), so the result is what the core would output.
+//!
+//! # The Verilog
+//! [`hdl`]: the core's binary32 adder, multiplier and divider and the core
+//! itself in Verilog (repository directory `hdl/`), bit-exact against
+//! Rust's `f32` and against [`run`], with the vector generators and the
+//! Icarus Verilog runners that test them.
 
 use core::fmt;
+
+pub mod hdl;
 
 use locus_core::nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x2, SMatrix, Vector2, Vector3};
 

@@ -2,7 +2,7 @@
 //! the M_zeta search, the alpha effect at the largest v_g, configuration
 //! errors, and exact merging of shards. Reduced grids keep each test short.
 
-use locus_analysis::doa::{
+use locus_doa::{
     Cell, Divergence, DoaConfig, DoaError, DoaResult, RunOutcome, SearchConfig, SettleTracker,
     Shard, Study, merge, search_m_zeta, vertex,
 };

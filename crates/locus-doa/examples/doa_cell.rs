@@ -3,12 +3,12 @@
 //! single-threaded. `scripts/doa_numpy.py` runs this and its numpy twin side
 //! by side and prints the ratio.
 //!
-//! `cargo run --release -p locus-analysis --example doa_cell -- V_G ALPHA M_ZETA REPEATS`
+//! `cargo run --release -p locus-doa --example doa_cell -- V_G ALPHA M_ZETA REPEATS`
 //! prints one line: `worst_settle_s=<s> seconds_per_cell=<s> steps=<n>`.
 
 use std::time::Instant;
 
-use locus_analysis::doa::{DoaConfig, Study, VERTICES};
+use locus_doa::{DoaConfig, Study, VERTICES};
 
 fn main() {
     let args: Vec<f64> = std::env::args()

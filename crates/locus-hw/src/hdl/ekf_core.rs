@@ -1,5 +1,5 @@
 //! The correction core in Verilog (`hdl/core/ekf_core.v`) against the
-//! software `f32` schedule ([`crate::hw::run`]): test vectors, one
+//! software `f32` schedule ([`crate::run`]): test vectors, one
 //! correction per line (the input bank and the expected `G`, `X+`, `P+`),
 //! and the simulation of `hdl/tb/tb_core.v` over them (Icarus Verilog or,
 //! for long runs, Verilator), which reports
@@ -16,7 +16,7 @@ use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 
 use super::{HdlError, TempDir, VerilatedSim};
-use crate::hw::{self, CoreInputs, CoreRun, HwConfig, Schedule, State};
+use crate::{CoreInputs, CoreRun, HwConfig, Schedule, State};
 
 /// Words per vector line: 26 inputs and 18 results.
 pub const WORDS: usize = 44;
@@ -130,7 +130,7 @@ impl CoreSimReport {
 pub fn write_vectors(path: &Path, cfg: &HwConfig, inputs: &[CoreInputs]) -> Result<(), HdlError> {
     let mut text = String::with_capacity(inputs.len() * WORDS * 9);
     for inp in inputs {
-        let run = hw::run(cfg, Schedule::Inverse2x2, inp)?;
+        let run = crate::run(cfg, Schedule::Inverse2x2, inp)?;
         text.push_str(&vector_line(inp, &run));
         text.push('\n');
     }
@@ -235,7 +235,7 @@ mod tests {
     #[test]
     fn a_vector_line_has_the_bank_then_the_results() {
         let inp = random_inputs(1, 3)[0];
-        let run = hw::run(&HwConfig::default(), Schedule::Inverse2x2, &inp).unwrap();
+        let run = crate::run(&HwConfig::default(), Schedule::Inverse2x2, &inp).unwrap();
         let line = vector_line(&inp, &run);
         let words: Vec<&str> = line.split(' ').collect();
         assert_eq!(words.len(), WORDS);

@@ -3,9 +3,9 @@
 //! correction, its cycle count against a hand count, and the operators it
 //! needs against the papers' 9 adders, 9 multipliers and 4 dividers.
 
-use locus_analysis::hw::{self, CoreInputs, HwConfig, Latencies, OpCounts, Schedule, State};
 use locus_core::nalgebra::{Matrix3, Vector3};
 use locus_core::{Belief, CovarianceUpdate, Ekf, MeasurementModel};
+use locus_hw::{self as hw, CoreInputs, HwConfig, Latencies, OpCounts, Schedule, State};
 use locus_models::{LaserMount, LaserWallPaper, WallLine};
 
 /// Deterministic pseudo-random numbers in [-1, 1) (a 64-bit LCG).

@@ -8,7 +8,7 @@
 
 use std::time::Instant;
 
-use locus_analysis::hdl::fp32::{self, Op, Vector};
+use locus_hw::hdl::fp32::{self, Op, Vector};
 
 const RANDOM: usize = 1_000_000;
 

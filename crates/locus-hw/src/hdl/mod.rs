@@ -23,7 +23,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::hw::Latencies;
+use crate::Latencies;
 
 pub mod ekf_core;
 pub mod fp32;
@@ -55,7 +55,7 @@ pub enum HdlError {
     NoSummary(String),
     /// The software model refused an input of the vectors.
     #[error("hdl: the model refused a correction: {0}")]
-    Model(#[from] crate::hw::HwError),
+    Model(#[from] crate::HwError),
 }
 
 impl HdlError {

@@ -1,6 +1,6 @@
 //! The correction core in Verilog (`hdl/core/ekf_core.v`, on the units of
 //! `hdl/fp/`) under Icarus Verilog against the software `f32` 11-step
-//! schedule (`locus_analysis::hw::run`): bit-exact `G`, `X+` and `P+` on
+//! schedule (`locus_hw::run`): bit-exact `G`, `X+` and `P+` on
 //! random corrections of realistic magnitude, the cycles from start to done
 //! and per FSM state equal to the cycle-level model's with the units'
 //! latencies, and a wrong expected word reported. The 10 000 corrections
@@ -8,9 +8,9 @@
 
 use std::time::Instant;
 
-use locus_analysis::hdl;
-use locus_analysis::hdl::ekf_core::{self, CoreSim};
-use locus_analysis::hw::{self, HwConfig, Schedule};
+use locus_hw::hdl;
+use locus_hw::hdl::ekf_core::{self, CoreSim};
+use locus_hw::{self as hw, HwConfig, Schedule};
 
 #[test]
 fn the_core_is_bit_exact_and_takes_the_models_cycles() {
