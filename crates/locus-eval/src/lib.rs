@@ -3,13 +3,14 @@
 //! UI: the per-step [`Sample`] (truth, estimate, covariance, odometry alone,
 //! NEES, NIS) that the summary, the pictures and the Monte Carlo statistics
 //! are computed from, the [`Record`] trait of a run's CSV log, the
-//! [`Summary`] built by a [`Tally`], and [`nees`], the one NEES.
+//! [`Summary`] built by a [`Tally`], [`nees`], the one NEES, and the
+//! [`results`] schema every source writes its `metrics.json` in.
 //!
 //! A runner (a simulator scenario, the replay) filters, hands each step's
 //! record to a sink as the run goes, and returns the [`Summary`] of a
-//! [`Tally`] it fed with every step's [`Sample`]. The summary serialises
-//! (serde) with every figure that cannot be computed as NaN, which
-//! `serde_json` writes as `null`.
+//! [`Tally`] it fed with every step: the [`Sample`] of a step the truth
+//! covers, the measurement counts of one it does not. Every figure that
+//! cannot be computed is NaN, which [`results`] writes as `null`.
 //!
 //! Units: SI (m, rad, s). Planar scenarios put `z = 0`; the 3-D `hover`
 //! scenario (paper 002) reports its body position in `position` and its
@@ -20,6 +21,8 @@ use std::time::Instant;
 use locus_core::chi2;
 use locus_core::nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use locus_core::{Belief, Pose};
+
+pub mod results;
 
 /// The NEES `e^T P^-1 e` of an estimate with error `e` (truth minus
 /// estimate, angles wrapped) and covariance `P` ([`locus_core::nees`]);
@@ -148,13 +151,18 @@ pub trait Record {
     fn sample(&self) -> Sample;
 }
 
-/// Summary of a run. Errors are against the truth.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+/// Summary of a run. Errors are against the truth, over the steps it
+/// covers; `metrics.json` writes it as [`results::Results`].
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Summary {
-    /// Steps simulated.
+    /// Steps tallied (simulated steps, or events of a log), compared with
+    /// the truth or not.
     pub steps: usize,
-    /// Simulated time (s).
-    pub sim_time: f64,
+    /// Steps compared with the truth (every step of a simulation).
+    pub compared: usize,
+    /// Time of the last step tallied (s): the simulated time, or the time
+    /// a replay covers from its first odometry record.
+    pub duration: f64,
     /// Laps of the path completed (scenarios that drive laps; else 0).
     pub laps_completed: usize,
     /// EKF position RMSE (m).
@@ -201,28 +209,29 @@ pub struct Summary {
     /// for a consistent Gaussian filter); heading NaN if the truth has no
     /// heading.
     pub within_3_sigma: [f64; 3],
-    /// Steps where a measurement arrived.
+    /// Steps where a measurement arrived (every step tallied).
     pub readings: usize,
     /// Measurements that reached the filter (associated; the others were
     /// dropped).
     pub associated: usize,
     /// Corrections that passed the gate and were applied.
-    pub corrections: usize,
-    /// Share of associated measurements applied (`corrections /
-    /// associated`; 0 when nothing was associated).
+    pub applied: usize,
+    /// Share of associated measurements applied (`applied / associated`;
+    /// NaN when nothing was associated).
     pub acceptance: f64,
     /// Wall-clock duration of the run (s), including the sink's time. Not
     /// reproducible.
     pub wall_clock: f64,
-    /// Simulated time over wall-clock time. Not reproducible.
+    /// [`Summary::duration`] over the wall-clock time. Not reproducible.
     pub real_time_factor: f64,
 }
 
 impl Summary {
     /// The same summary with every figure that needs the truth NaN ("n/a",
-    /// `null` in JSON), as a tally of no step gives them: for a run whose
-    /// only steps compared with the truth carry nothing to judge (a start
-    /// pose copied from that truth).
+    /// `null` in JSON), as a tally of no compared step gives them: for a
+    /// run whose only steps compared with the truth carry nothing to judge
+    /// (a start pose copied from that truth). The counts, the duration and
+    /// the timing stay.
     #[must_use]
     pub fn without_truth_figures(mut self) -> Self {
         for v in [
@@ -238,8 +247,6 @@ impl Summary {
             &mut self.odometry_max_position_error,
             &mut self.mean_nees,
             &mut self.nees_in_interval,
-            &mut self.sim_time,
-            &mut self.real_time_factor,
         ] {
             *v = f64::NAN;
         }
@@ -261,8 +268,11 @@ impl Summary {
 #[derive(Debug, Clone)]
 pub struct Tally {
     started: Instant,
+    /// Steps pushed or counted.
     steps: usize,
-    sim_time: f64,
+    /// Steps pushed (compared with the truth).
+    compared: usize,
+    duration: f64,
     sq_pos: f64,
     sq_heading: f64,
     /// The EKF's wrapped heading errors (rad) of the steps whose truth has
@@ -290,7 +300,7 @@ pub struct Tally {
     mixed_dof: bool,
     readings: usize,
     associated: usize,
-    corrections: usize,
+    applied: usize,
 }
 
 impl Tally {
@@ -303,7 +313,8 @@ impl Tally {
         Ok(Self {
             started: Instant::now(),
             steps: 0,
-            sim_time: 0.0,
+            compared: 0,
+            duration: 0.0,
             sq_pos: 0.0,
             sq_heading: 0.0,
             heading_errors: Vec::new(),
@@ -326,18 +337,19 @@ impl Tally {
             mixed_dof: false,
             readings: 0,
             associated: 0,
-            corrections: 0,
+            applied: 0,
         })
     }
 
-    /// Adds one step. Its heading figures count only if its heading error
-    /// is a number (a truth with no heading gives NaN); the NEES takes the
-    /// sample's dof: the first sample's replaces the tally's, and samples
-    /// of different dof make the NEES figures NaN.
+    /// Adds one step compared with the truth. Its heading figures count
+    /// only if its heading error is a number (a truth with no heading gives
+    /// NaN); the NEES takes the sample's dof: the first sample's replaces
+    /// the tally's, and samples of different dof make the NEES figures
+    /// NaN. Its measurement counts as [`Tally::count`]'s.
     pub fn push(&mut self, s: &Sample) {
         if s.nees_dof != self.nees_dof {
             match (
-                self.steps,
+                self.compared,
                 chi2::quantile(0.025, s.nees_dof),
                 chi2::quantile(0.975, s.nees_dof),
             ) {
@@ -348,8 +360,7 @@ impl Tally {
                 _ => self.mixed_dof = true,
             }
         }
-        self.steps += 1;
-        self.sim_time = s.time;
+        self.compared += 1;
         let e2 = s.position_error_sq();
         self.sq_pos += e2;
         if !s.heading_error.is_nan() {
@@ -398,10 +409,23 @@ impl Tally {
                 *count += 1;
             }
         }
-        self.readings += usize::from(s.measured);
-        if let Some((_, _, applied)) = s.correction {
+        self.count(
+            s.time,
+            s.measured,
+            s.correction.map(|(_, _, applied)| applied),
+        );
+    }
+
+    /// Adds one step with no truth to compare with: its time `time` (s),
+    /// whether a measurement arrived, and whether it reached the gate
+    /// (`Some`) and was applied (`Some(true)`).
+    pub fn count(&mut self, time: f64, measured: bool, applied: Option<bool>) {
+        self.steps += 1;
+        self.duration = time;
+        self.readings += usize::from(measured);
+        if let Some(applied) = applied {
             self.associated += 1;
-            self.corrections += usize::from(applied);
+            self.applied += usize::from(applied);
         }
     }
 
@@ -411,8 +435,8 @@ impl Tally {
     pub fn summary(&self, laps_completed: usize) -> Summary {
         // No step compared with the truth: every figure that needs it is
         // NaN ("n/a", null in JSON), never 0.
-        let n = if self.steps > 0 {
-            self.steps as f64
+        let n = if self.compared > 0 {
+            self.compared as f64
         } else {
             f64::NAN
         };
@@ -438,7 +462,7 @@ impl Tally {
         let nees_n = if self.mixed_dof { f64::NAN } else { n };
         // Only when every sample had a heading (3 dof). The heading errors
         // enter unwrapped: exact unless they straddle +-pi.
-        let nees_about_offset = if self.heading_errors.len() == self.steps {
+        let nees_about_offset = if self.heading_errors.len() == self.compared {
             (self.nees_sum - 2.0 * offset * self.offset_terms.0
                 + offset * offset * self.offset_terms.1)
                 / nees_n
@@ -448,7 +472,8 @@ impl Tally {
         let wall_clock = self.started.elapsed().as_secs_f64();
         Summary {
             steps: self.steps,
-            sim_time: self.sim_time,
+            compared: self.compared,
+            duration: self.duration,
             laps_completed,
             ekf_position_rmse: (self.sq_pos / n).sqrt(),
             ekf_heading_rmse: (self.sq_heading / heading_n).sqrt(),
@@ -456,7 +481,7 @@ impl Tally {
             ekf_heading_rmse_about_offset: about_offset,
             within_3_sigma_heading_about_offset: inside_about_offset,
             mean_nees_about_offset: nees_about_offset,
-            ekf_max_position_error: if self.steps > 0 {
+            ekf_max_position_error: if self.compared > 0 {
                 self.max_pos
             } else {
                 f64::NAN
@@ -474,15 +499,15 @@ impl Tally {
             ],
             readings: self.readings,
             associated: self.associated,
-            corrections: self.corrections,
+            applied: self.applied,
             acceptance: if self.associated > 0 {
-                self.corrections as f64 / self.associated as f64
+                self.applied as f64 / self.associated as f64
             } else {
                 f64::NAN
             },
             wall_clock,
             real_time_factor: if wall_clock > 0.0 {
-                self.sim_time / wall_clock
+                self.duration / wall_clock
             } else {
                 f64::INFINITY
             },
@@ -595,6 +620,25 @@ mod tests {
         // Samples of both kinds in one tally: no mean NEES.
         t.push(&sample(10, &Pose::new(1.0, 2.0, 0.0), 1.0, 2.0, 0.0));
         assert!(t.summary(0).mean_nees.is_nan());
+    }
+
+    /// A step the truth does not cover counts its measurement and its
+    /// time, and leaves the errors to the compared steps.
+    #[test]
+    fn a_step_without_truth_is_counted_not_compared() {
+        let mut t = Tally::new(3).unwrap();
+        t.push(&sample(0, &Pose::new(0.0, 0.0, 0.0), 0.1, 0.0, 0.0));
+        t.count(5.0, true, Some(true));
+        t.count(6.0, true, Some(false));
+        t.count(7.0, true, None);
+        t.count(8.0, false, None);
+        let s = t.summary(0);
+        assert_eq!((s.steps, s.compared), (5, 1));
+        assert_eq!((s.readings, s.associated, s.applied), (3, 2, 1));
+        assert_eq!(s.acceptance, 0.5);
+        assert_eq!(s.duration, 8.0);
+        assert!((s.ekf_position_rmse - 0.1).abs() < 1e-12, "{s:?}");
+        assert_eq!(s.within_3_sigma[..2], [1.0, 1.0]);
     }
 
     /// A run compared with no truth (a log without ground truth) has no

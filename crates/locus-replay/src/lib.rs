@@ -635,11 +635,11 @@ impl<'a> Engine<'a> {
         };
         self.next_index += 1;
         self.report.steps += 1;
-        if let Some(sample) = step.sample() {
+        if step.truth.is_some() {
             self.report.compared += 1;
             self.compared_after_start += usize::from(time > self.t0);
-            self.tally.push(&sample);
         }
+        step.tally_into(&mut self.tally, Some(&step.belief));
         self.held.push(step);
         if self.cfg.smooth {
             self.nodes.push(smoother::Node {
@@ -652,29 +652,13 @@ impl<'a> Engine<'a> {
     }
 }
 
-/// `s` (a tally of the steps compared with the truth; its truth figures
-/// are already NaN when no step was compared) made honest for a replay: the
-/// counts of readings, associated and applied sightings are the replay's
-/// own over every sighting (`r`), which do not need the truth; with no
-/// step compared after the start (`judged` false: the only one compared is
-/// the start pose, copied from the truth when the replay started from
-/// it) every truth figure, the compared time and its real-time factor are
-/// NaN, never the 0 error and 100 % of a pose compared with itself.
-fn honest(mut s: locus_eval::Summary, r: &Report, judged: bool) -> locus_eval::Summary {
-    if s.steps == 0 || !judged {
-        s = s.without_truth_figures();
-    }
-    s.readings = r.sightings;
-    s.associated = r.applied + r.gated;
-    s.corrections = r.applied;
-    #[allow(clippy::cast_precision_loss)]
-    let acceptance = if s.associated > 0 {
-        s.corrections as f64 / s.associated as f64
-    } else {
-        f64::NAN
-    };
-    s.acceptance = acceptance;
-    s
+/// `s` (a tally of every step) judged for a replay: with no step compared
+/// after the start (`judged` false: the only one compared is the start
+/// pose, copied from the truth when the replay started from it) every
+/// truth figure is NaN, never the 0 error and 100 % of a pose compared
+/// with itself.
+fn judged(s: locus_eval::Summary, judged: bool) -> locus_eval::Summary {
+    if judged { s } else { s.without_truth_figures() }
 }
 
 /// What [`Error::NoStart`] says the start came from: the sightings on
@@ -948,11 +932,7 @@ pub fn replay_in_segments(
     let last = engine.filter.base().belief;
     engine.report.final_belief = pose_belief(&last);
     engine.report.calibration = calibration_of(&last);
-    engine.report.summary = honest(
-        engine.tally.summary(0),
-        &engine.report,
-        engine.compared_after_start > 0,
-    );
+    engine.report.summary = judged(engine.tally.summary(0), engine.compared_after_start > 0);
     if cfg.smooth {
         smoother::flush(&mut engine, checkpoints, &mut sink)?;
     }

@@ -8,10 +8,11 @@ use locus_eval::Summary;
 pub struct Report {
     /// Errors against the ground truth (over the steps it covers), as for
     /// `locus run`; NaN (printed "n/a", `null` in JSON) for every figure
-    /// that needs the truth when no step was compared. `readings` counts
-    /// all the sightings replayed, `associated` those the gate judged
-    /// (applied or gated), `corrections` those applied, whether or not the
-    /// truth covers them; `acceptance` is NaN when none was judged.
+    /// that needs the truth when no step was compared. The tally takes
+    /// every event: `steps` counts them all, `compared` those the truth
+    /// covers; `readings` counts all the sightings replayed, `associated`
+    /// those the gate judged (applied or gated), `applied` those applied;
+    /// `acceptance` is NaN when none was judged.
     pub summary: Summary,
     /// The smoother's figures against the ground truth (with
     /// [`Config::smooth`](crate::Config::smooth)).

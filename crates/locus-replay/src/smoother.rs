@@ -23,7 +23,7 @@ use locus_models::unicycle::Velocities;
 use locus_eval::Tally;
 
 use crate::{
-    Checkpoint, Engine, Error, STATE, StateMatrix, StateVector, Step, calibration_of, honest,
+    Checkpoint, Engine, Error, STATE, StateMatrix, StateVector, Step, calibration_of, judged,
     pose_belief,
 };
 
@@ -231,18 +231,12 @@ pub(crate) fn flush<'a>(
         })
         .map_err(|time| Error::Smoother { time })?;
         for step in &engine.held {
-            if let Some(sample) = step.smoothed.and_then(|pose| step.sample_of(&pose)) {
-                tally.push(&sample);
-            }
+            step.tally_into(&mut tally, step.smoothed.as_ref());
             sink(step);
         }
     }
     engine.report = report;
-    engine.report.smoothed = Some(honest(
-        tally.summary(0),
-        &engine.report,
-        engine.compared_after_start > 0,
-    ));
+    engine.report.smoothed = Some(judged(tally.summary(0), engine.compared_after_start > 0));
     engine.report.smoothed_calibration = first_calibration;
     engine.report.smoothing_held = held;
     engine.report.smoothing_checkpoints = checkpoints.len() - 1;

@@ -259,6 +259,43 @@ impl Step {
         }
     }
 
+    /// Whether a measurement arrived at this step (a sighting), and the
+    /// correction it made if it reached the gate: its NIS, the NIS's
+    /// degrees of freedom and whether it was applied ([`Sample`]'s
+    /// `measured` and `correction`).
+    #[must_use]
+    pub fn measurement(&self) -> (bool, Option<(f64, u32, bool)>) {
+        match self.kind {
+            EventKind::Odometry { .. } => (false, None),
+            EventKind::Sighting {
+                outcome, sighting, ..
+            } => match outcome {
+                SightingOutcome::Applied { nis, .. } => (true, Some((nis, sighting.dof(), true))),
+                SightingOutcome::Gated { nis } => (true, Some((nis, sighting.dof(), false))),
+                SightingOutcome::NotInMap
+                | SightingOutcome::NoMeasurement
+                | SightingOutcome::Unusable(_) => (true, None),
+            },
+        }
+    }
+
+    /// Adds the step to `tally`: its [`Step::sample_of`] `belief` if there
+    /// is one and the truth covers the step, else only its time and
+    /// [`Step::measurement`].
+    pub fn tally_into(&self, tally: &mut locus_eval::Tally, belief: Option<&Belief<f64, 3>>) {
+        match belief.and_then(|b| self.sample_of(b)) {
+            Some(sample) => tally.push(&sample),
+            None => {
+                let (measured, correction) = self.measurement();
+                tally.count(
+                    self.elapsed,
+                    measured,
+                    correction.map(|(_, _, applied)| applied),
+                );
+            }
+        }
+    }
+
     /// The figures `locus run` summarises and draws, if the step has a
     /// ground truth to compare with (NEES against it, 3 dof).
     #[must_use]
@@ -272,18 +309,7 @@ impl Step {
     pub fn sample_of(&self, belief: &Belief<f64, 3>) -> Option<Sample> {
         let t = self.truth?;
         let d = &self.dead_reckoning;
-        let (measured, correction) = match self.kind {
-            EventKind::Odometry { .. } => (false, None),
-            EventKind::Sighting {
-                outcome, sighting, ..
-            } => match outcome {
-                SightingOutcome::Applied { nis, .. } => (true, Some((nis, sighting.dof(), true))),
-                SightingOutcome::Gated { nis } => (true, Some((nis, sighting.dof(), false))),
-                SightingOutcome::NotInMap
-                | SightingOutcome::NoMeasurement
-                | SightingOutcome::Unusable(_) => (true, None),
-            },
-        };
+        let (measured, correction) = self.measurement();
         Some(Sample::planar(
             self.index,
             self.elapsed,

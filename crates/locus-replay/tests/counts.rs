@@ -81,8 +81,12 @@ proptest! {
             r.applied + r.gated + r.not_in_map + r.no_measurement + r.unusable,
             "{:?}", r
         );
+        // The summary tallies every event, compared with the truth or not.
+        prop_assert_eq!(r.summary.steps, r.steps);
+        prop_assert_eq!(r.summary.compared, r.compared);
         prop_assert_eq!(r.summary.readings, r.sightings);
         prop_assert_eq!(r.summary.associated, r.applied + r.gated);
+        prop_assert_eq!(r.summary.applied, r.applied);
         prop_assert_eq!(odometry, r.odometry + r.implausible_odometry);
         // The belief stays finite whatever the values.
         prop_assert!(r.final_belief.x.iter().all(|v| v.is_finite()), "{:?}", r.final_belief);
@@ -98,5 +102,11 @@ proptest! {
             (r.sightings, r.applied, r.gated, r.too_late, r.unusable, r.no_measurement)
         );
         prop_assert_eq!((s.odometry, s.implausible_odometry), (r.odometry, r.implausible_odometry));
+        // The smoother's summary counts the same events as the filter's.
+        let (f, m) = (s.summary, s.smoothed.expect("smoothed"));
+        prop_assert_eq!(
+            (m.steps, m.readings, m.associated, m.applied),
+            (f.steps, f.readings, f.associated, f.applied)
+        );
     }
 }

@@ -39,10 +39,10 @@ fn closed_loop(c: &mut Criterion) {
     println!(
         "square: {} steps, {:.1} s simulated, {:.2} ms per run: {:.2} us per step, real-time factor {:.0}",
         summary.steps,
-        summary.sim_time,
+        summary.duration,
         per_run * 1e3,
         per_run * 1e6 / summary.steps as f64,
-        summary.sim_time / per_run
+        summary.duration / per_run
     );
 }
 

@@ -200,20 +200,13 @@ pub struct HoverRecord {
 
 impl Record for HoverRecord {
     fn csv_header() -> String {
-        let mut cols = vec!["step".to_string(), "time[s]".to_string()];
-        let names = [
-            "tx[m]",
-            "ty[m]",
-            "tz[m]",
-            "phi[rad]",
-            "theta[rad]",
-            "psi[rad]",
-        ];
+        let mut cols = vec!["step".to_string(), "time_s".to_string()];
+        let names = ["tx_m", "ty_m", "tz_m", "phi_rad", "theta_rad", "psi_rad"];
         for prefix in ["true_", "est_", "std_"] {
             cols.extend(names.iter().map(|n| format!("{prefix}{n}")));
         }
         cols.extend(
-            ["attitude_err[rad]", "nis", "nees"]
+            ["attitude_err_rad", "nis", "nees"]
                 .iter()
                 .map(ToString::to_string),
         );

@@ -13,9 +13,9 @@ fn ekf_beats_odometry_and_the_seed_reproduces_the_run() {
     })
     .expect("run");
     assert_eq!(records, a.steps);
-    assert_eq!(applied, a.corrections);
+    assert_eq!(applied, a.applied);
     assert_eq!(a.laps_completed, cfg.laps);
-    assert!(a.corrections > 100, "{a:?}");
+    assert!(a.applied > 100, "{a:?}");
     assert!(
         a.ekf_position_rmse < 0.25 * a.odometry_position_rmse,
         "EKF {} m vs odometry {} m",

@@ -110,7 +110,7 @@ fn run_is_reproducible_and_logs_every_step() {
     assert_eq!(rows.len(), a.steps);
     let columns = TricycleSlipRecord::csv_header().split(',').count();
     assert!(rows.iter().all(|r| r.split(',').count() == columns));
-    assert!(a.corrections > 0);
+    assert!(a.applied > 0);
 }
 
 #[test]

@@ -1,124 +1,123 @@
-//! `metrics.json`, written by `locus run` and `locus replay` through serde
-//! (`serde_json`): the settings, then the figures in SI units under keys
-//! that name the unit (`_m`, `_rad`, `_s`, `_share`). A figure that cannot
-//! be computed (NaN, e.g. odometry in a scenario without it) is `null`,
-//! never 0.
+//! `metrics.json`, written by `locus run` (one run or a Monte Carlo) and
+//! `locus replay` through serde (`serde_json`), in the one schema of
+//! [`locus_eval::results`] (`docs/metrics.schema.json`, `docs/results.md`):
+//! the [`SCHEMA`] tag, the source and its name, the source-neutral
+//! [`Results`], then the section of the source (`simulation`,
+//! `monte_carlo`, `replay`). Figures in SI units under keys that name the
+//! unit; a figure that cannot be computed (NaN) is `null`, never 0.
 //!
-//! Layout: one key per line; a nested object (the spread of a Monte Carlo
-//! metric) on the line of its key.
+//! Layout: one key per line for the file and its sections; an object
+//! inside a section (a calibration term, a Monte Carlo spread, the
+//! replay's start) on the line of its key.
 
 use std::fs;
 use std::io;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use locus_eval::Summary;
+use locus_eval::results::SCHEMA;
 use serde::Serialize;
 
 use crate::run::Info;
 
-/// The settings that open every `metrics.json`: the scenario, its seed (one
-/// run) or first seed and number of runs (a Monte Carlo), the filter step
-/// and the laps (scenarios that drive laps).
-#[derive(Debug, Serialize)]
-pub struct Settings<'a> {
-    /// Scenario or log name.
-    pub scenario: &'a str,
-    /// Seed of a single run.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub seed: Option<u64>,
-    /// First seed of a Monte Carlo.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub first_seed: Option<u64>,
-    /// Runs of a Monte Carlo.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub runs: Option<usize>,
-    /// Filter step (s).
-    pub dt_s: f64,
-    /// Laps to drive.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub laps: Option<usize>,
+/// Where a `metrics.json` came from: its `"source"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Source {
+    /// One run of a simulated scenario.
+    Simulation,
+    /// A simulated scenario over several seeds.
+    MonteCarlo,
+    /// A recorded log replayed.
+    Replay,
 }
 
-impl<'a> Settings<'a> {
-    /// The settings of the scenario `info`, without seeds.
-    #[must_use]
-    pub fn of(info: &'a Info) -> Self {
+/// The whole of a `metrics.json`: the [`SCHEMA`] tag, the source, the
+/// scenario or log name, the results `R` (a
+/// [`Results`](locus_eval::results::Results), or their Monte
+/// Carlo spreads) and the source's own section `S`.
+#[derive(Serialize)]
+pub struct Metrics<'a, R: Serialize, S: Serialize> {
+    schema: &'static str,
+    source: Source,
+    /// Scenario or log name.
+    scenario: &'a str,
+    #[serde(flatten)]
+    results: R,
+    #[serde(flatten)]
+    section: S,
+}
+
+impl<'a, R: Serialize, S: Serialize> Metrics<'a, R, S> {
+    /// The metrics of `scenario` from `source`: `results`, then `section`
+    /// (a struct whose one field names the source's section).
+    pub fn new(source: Source, scenario: &'a str, results: R, section: S) -> Self {
         Self {
-            scenario: &info.name,
-            seed: None,
-            first_seed: None,
-            runs: None,
-            dt_s: info.dt,
-            laps: info.laps,
+            schema: SCHEMA,
+            source,
+            scenario,
+            results,
+            section,
         }
     }
 }
 
-/// A [`Summary`] under the keys of `metrics.json` (in this order).
-#[derive(Serialize)]
-#[serde(remote = "Summary")]
-struct SummaryKeys {
-    steps: usize,
-    #[serde(rename = "sim_time_s")]
-    sim_time: f64,
-    laps_completed: usize,
-    #[serde(rename = "ekf_position_rmse_m")]
-    ekf_position_rmse: f64,
-    #[serde(rename = "ekf_heading_rmse_rad")]
-    ekf_heading_rmse: f64,
-    #[serde(rename = "ekf_heading_offset_rad")]
-    ekf_heading_offset: f64,
-    #[serde(rename = "ekf_heading_rmse_about_offset_rad")]
-    ekf_heading_rmse_about_offset: f64,
-    #[serde(rename = "within_3_sigma_heading_about_offset_share")]
-    within_3_sigma_heading_about_offset: f64,
-    mean_nees_about_offset: f64,
-    #[serde(rename = "ekf_max_position_error_m")]
-    ekf_max_position_error: f64,
-    #[serde(rename = "odometry_position_rmse_m")]
-    odometry_position_rmse: f64,
-    #[serde(rename = "odometry_heading_rmse_rad")]
-    odometry_heading_rmse: f64,
-    #[serde(rename = "odometry_max_position_error_m")]
-    odometry_max_position_error: f64,
-    mean_nees: f64,
-    #[serde(rename = "nees_in_95_interval_share")]
-    nees_in_interval: f64,
-    /// Measurements of any kind (the key is named for the square's IR
-    /// sensors).
-    #[serde(rename = "ir_readings")]
-    readings: usize,
-    associated: usize,
-    corrections: usize,
-    #[serde(rename = "acceptance_share")]
-    acceptance: f64,
-    #[serde(rename = "wall_clock_s")]
-    wall_clock: f64,
-    nees_dof: u32,
-    real_time_factor: f64,
+/// The `simulation` section of a `metrics.json`: the scenario's settings
+/// (and of one run, its seed and laps completed).
+#[derive(Debug, Serialize)]
+pub struct Simulation {
+    /// Seed of a single run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    /// Filter step, s.
+    pub dt_s: f64,
+    /// Laps to drive (scenarios that drive laps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub laps: Option<usize>,
+    /// Laps completed (one run of a scenario that drives laps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub laps_completed: Option<usize>,
 }
 
-/// `metrics.json` of one run or replay: the settings, the summary, then
-/// the fields of `extra` (`()` for none).
-#[derive(Serialize)]
-pub struct RunMetrics<'a, E: Serialize> {
-    /// Scenario and settings.
-    #[serde(flatten)]
-    pub settings: Settings<'a>,
-    /// The run's summary.
-    #[serde(flatten, with = "SummaryKeys")]
-    pub summary: Summary,
-    /// More fields, after the summary's.
-    #[serde(flatten)]
-    pub extra: E,
+impl Simulation {
+    /// The settings of the scenario `info`, without a seed or laps
+    /// completed.
+    #[must_use]
+    pub fn of(info: &Info) -> Self {
+        Self {
+            seed: None,
+            dt_s: info.dt,
+            laps: info.laps,
+            laps_completed: None,
+        }
+    }
 }
 
-/// A JSON formatter: the outer object one key per line (indented by two
-/// spaces), nested objects on one line (`{ "mean": 1.0, "std": 0.5 }`).
+/// The section of one simulated run.
+#[derive(Serialize)]
+pub struct SimulationSection {
+    /// The scenario's settings.
+    pub simulation: Simulation,
+}
+
+/// A JSON formatter: the file and its sections one key per line (indented
+/// by two spaces a level), objects deeper down on one line
+/// (`{ "mean": 1.0, "std": 0.5 }`).
 #[derive(Default)]
 struct Formatter {
     depth: usize,
+}
+
+impl Formatter {
+    /// The deepest level written one key per line: the file's keys and
+    /// its sections'.
+    const LINES: usize = 2;
+
+    /// A line break and the indentation of `depth`.
+    fn indent<W: ?Sized + io::Write>(w: &mut W, depth: usize) -> io::Result<()> {
+        w.write_all(b"\n")?;
+        w.write_all(&b"  ".repeat(depth))
+    }
 }
 
 impl serde_json::ser::Formatter for Formatter {
@@ -129,7 +128,12 @@ impl serde_json::ser::Formatter for Formatter {
 
     fn end_object<W: ?Sized + io::Write>(&mut self, w: &mut W) -> io::Result<()> {
         self.depth -= 1;
-        w.write_all(if self.depth == 0 { b"\n}" } else { b" }" })
+        if self.depth < Self::LINES {
+            Self::indent(w, self.depth)?;
+            w.write_all(b"}")
+        } else {
+            w.write_all(b" }")
+        }
     }
 
     fn begin_object_key<W: ?Sized + io::Write>(
@@ -140,7 +144,11 @@ impl serde_json::ser::Formatter for Formatter {
         if !first {
             w.write_all(b",")?;
         }
-        w.write_all(if self.depth == 1 { b"\n  " } else { b" " })
+        if self.depth <= Self::LINES {
+            Self::indent(w, self.depth)
+        } else {
+            w.write_all(b" ")
+        }
     }
 
     fn begin_object_value<W: ?Sized + io::Write>(&mut self, w: &mut W) -> io::Result<()> {
@@ -177,11 +185,14 @@ pub fn write(dir: &Path, metrics: &impl Serialize) -> Result<PathBuf> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use locus_eval::Summary;
+    use locus_eval::results::Results;
 
     fn summary() -> Summary {
         Summary {
             steps: 3,
-            sim_time: 0.03,
+            compared: 3,
+            duration: 0.03,
             laps_completed: 0,
             ekf_position_rmse: 0.0117,
             ekf_heading_rmse: 0.02,
@@ -199,7 +210,7 @@ mod tests {
             within_3_sigma: [1.0, 1.0, f64::NAN],
             readings: 2,
             associated: 2,
-            corrections: 1,
+            applied: 1,
             acceptance: 0.5,
             wall_clock: 0.001,
             real_time_factor: 30.0,
@@ -208,64 +219,84 @@ mod tests {
 
     #[test]
     fn a_missing_figure_is_null_and_the_keys_keep_their_order() {
-        let settings = Settings {
-            scenario: "a \"quoted\" name",
-            seed: Some(7),
-            first_seed: None,
-            runs: None,
-            dt_s: 0.01,
-            laps: Some(2),
+        let section = SimulationSection {
+            simulation: Simulation {
+                seed: Some(7),
+                dt_s: 0.01,
+                laps: Some(2),
+                laps_completed: Some(0),
+            },
         };
-        let text = to_json(&RunMetrics {
-            settings,
-            summary: summary(),
-            extra: (),
-        })
+        let text = to_json(&Metrics::new(
+            Source::Simulation,
+            "a \"quoted\" name",
+            Results::of(&summary()),
+            section,
+        ))
         .unwrap();
-        assert!(text.starts_with(
-            "{\n  \"scenario\": \"a \\\"quoted\\\" name\",\n  \"seed\": 7,\n  \"dt_s\": 0.01,\n  \"laps\": 2,\n  \"steps\": 3,\n"
-        ), "{text}");
         assert!(
-            text.contains("\n  \"odometry_position_rmse_m\": null,\n"),
+            text.starts_with(
+                "{\n  \"schema\": \"locus-metrics/2\",\n  \"source\": \"simulation\",\n  \
+                 \"scenario\": \"a \\\"quoted\\\" name\",\n  \"steps\": 3,\n  \
+                 \"duration_s\": 0.03,\n  \"filter\": {\n    \"compared\": 3,\n    \
+                 \"position_rmse_m\": 0.0117,\n"
+            ),
             "{text}"
         );
         assert!(
-            text.contains("\n  \"odometry_max_position_error_m\": null,\n"),
+            text.contains("\n  \"odometry\": {\n    \"position_rmse_m\": null,\n"),
             "{text}"
         );
         assert!(
-            text.ends_with("\n  \"real_time_factor\": 30.0\n}\n"),
+            text.contains("\n    \"max_position_error_m\": null\n  },\n"),
+            "{text}"
+        );
+        assert!(
+            text.ends_with(
+                "\n  \"simulation\": {\n    \"seed\": 7,\n    \"dt_s\": 0.01,\n    \
+                 \"laps\": 2,\n    \"laps_completed\": 0\n  }\n}\n"
+            ),
             "{text}"
         );
         let value: serde_json::Value = serde_json::from_str(&text).unwrap();
-        assert_eq!(value["ekf_position_rmse_m"], 0.0117);
-        assert_eq!(value["ir_readings"], 2);
-        assert!(value.get("first_seed").is_none());
+        assert_eq!(value["filter"]["position_rmse_m"], 0.0117);
+        assert_eq!(value["filter"]["within_3_sigma_heading_share"], Value::Null);
+        assert_eq!(value["counts"]["readings"], 2);
+        assert_eq!(value["counts"]["applied"], 1);
+        assert!(value.get("smoother").is_none());
     }
 
+    use serde_json::Value;
+
     #[test]
-    fn nested_objects_stand_on_one_line() {
+    fn objects_below_the_sections_stand_on_one_line() {
         #[derive(Serialize)]
         struct Spread {
             mean: f64,
             std: f64,
         }
         #[derive(Serialize)]
+        struct Section {
+            x: Spread,
+        }
+        #[derive(Serialize)]
         struct Outer {
             runs: usize,
-            x: Spread,
+            section: Section,
         }
         let text = to_json(&Outer {
             runs: 4,
-            x: Spread {
-                mean: 1.5,
-                std: f64::NAN,
+            section: Section {
+                x: Spread {
+                    mean: 1.5,
+                    std: f64::NAN,
+                },
             },
         })
         .unwrap();
         assert_eq!(
             text,
-            "{\n  \"runs\": 4,\n  \"x\": { \"mean\": 1.5, \"std\": null }\n}\n"
+            "{\n  \"runs\": 4,\n  \"section\": {\n    \"x\": { \"mean\": 1.5, \"std\": null }\n  }\n}\n"
         );
     }
 }

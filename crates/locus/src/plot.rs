@@ -1,5 +1,5 @@
-//! Pictures of a run, from its per-step [`Sample`]s and the map's walls, so
-//! they work for every scenario: `map` (walls, true / estimated / odometry
+//! Pictures of a run, from its per-step [`Sample`]s and its [`Map`] (walls
+//! or landmarks), so they work for every scenario and log: `map` (walls, true / estimated / odometry
 //! paths, covariance ellipses of the x-y block), `errors` (x, y, heading
 //! errors with +-3 sigma bands) and `covariance` (the variances over time,
 //! log scale), each as PNG and SVG; `nis` for a replay. Text uses the
@@ -55,6 +55,40 @@ pub struct PictureArgs {
     /// 1.515, 98.9 % at 3.
     #[arg(long, default_value_t = ELLIPSE_SIGMA, value_parser = crate::args::positive_f64)]
     pub ellipse_sigma: f64,
+}
+
+/// Half the arm of a landmark's cross on the map, m.
+const CROSS_HALF: f64 = 0.15;
+
+/// What the map shows under the paths, in the world frame (m).
+#[derive(Debug, Clone, Copy)]
+pub enum Map<'a> {
+    /// A simulated world's walls, drawn as thick lines.
+    Walls(&'a [Segment<f64>]),
+    /// A log's landmarks at `[x, y]`, drawn as crosses.
+    Landmarks(&'a [[f64; 2]]),
+}
+
+impl Map<'_> {
+    /// The strokes that draw the map (`[a, b]` end points, m) and their
+    /// legend label.
+    fn strokes(self) -> (Vec<[[f64; 2]; 2]>, &'static str) {
+        match self {
+            Map::Walls(walls) => (walls.iter().map(|w| [w.a, w.b]).collect(), "walls"),
+            Map::Landmarks(points) => (
+                points
+                    .iter()
+                    .flat_map(|&[x, y]| {
+                        [
+                            [[x - CROSS_HALF, y], [x + CROSS_HALF, y]],
+                            [[x, y - CROSS_HALF], [x, y + CROSS_HALF]],
+                        ]
+                    })
+                    .collect(),
+                "landmarks",
+            ),
+        }
+    }
 }
 
 /// Simulated time between two covariance ellipses on the map (s).
@@ -141,18 +175,19 @@ fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
 fn draw_map<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     samples: &[Sample],
-    (walls, walls_label): (&[Segment<f64>], &str),
+    map: Map<'_>,
     title: &str,
     sigma: f64,
 ) -> Result<()> {
+    let (strokes, map_label) = map.strokes();
     root.fill(&WHITE).map_err(err)?;
     let (area, band) = root.split_horizontally(MAP_SIDE);
     let mut legend: Vec<(String, ShapeStyle)> = Vec::new();
     let mut xs: Vec<f64> = Vec::new();
     let mut ys: Vec<f64> = Vec::new();
-    for w in walls {
-        xs.extend([w.a[0], w.b[0]]);
-        ys.extend([w.a[1], w.b[1]]);
+    for [a, b] in &strokes {
+        xs.extend([a[0], b[0]]);
+        ys.extend([a[1], b[1]]);
     }
     for s in samples {
         xs.extend([s.truth[0], s.estimate[0]]);
@@ -195,11 +230,11 @@ fn draw_map<DB: DrawingBackend>(
         .map_err(err)?;
 
     let wall_style = ShapeStyle::from(&BLACK).stroke_width(4);
-    for (i, w) in walls.iter().enumerate() {
-        let series = LineSeries::new([(w.a[0], w.a[1]), (w.b[0], w.b[1])], wall_style);
+    for (i, [a, b]) in strokes.iter().enumerate() {
+        let series = LineSeries::new([(a[0], a[1]), (b[0], b[1])], wall_style);
         chart.draw_series(series).map_err(err)?;
         if i == 0 {
-            legend.push((walls_label.to_string(), wall_style));
+            legend.push((map_label.to_string(), wall_style));
         }
     }
     let truth = RGBColor(0, 150, 0);
@@ -461,8 +496,8 @@ fn draw_covariance<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Writes `map` (the map's segments labelled `walls_label` in the legend,
-/// ellipses at `ellipse_sigma` standard deviations),
+/// Writes `map` (the [`Map`] `map`, the paths, ellipses at
+/// `ellipse_sigma` standard deviations),
 /// `errors` and `covariance` as `.png` and `.svg` into `dir`; returns the
 /// paths written.
 ///
@@ -471,7 +506,7 @@ fn draw_covariance<DB: DrawingBackend>(
 pub fn write_all(
     dir: &Path,
     samples: &[Sample],
-    (walls, walls_label): (&[Segment<f64>], &str),
+    map: Map<'_>,
     title: &str,
     ellipse_sigma: f64,
 ) -> Result<Vec<PathBuf>> {
@@ -484,7 +519,7 @@ pub fn write_all(
     font::register()?;
     let mut written = Vec::new();
     for ext in ["png", "svg"] {
-        let map = dir.join(format!("map.{ext}"));
+        let map_file = dir.join(format!("map.{ext}"));
         let errors = dir.join(format!("errors.{ext}"));
         let cov = dir.join(format!("covariance.{ext}"));
         let map_title = format!("{title}: paths and covariance");
@@ -493,16 +528,16 @@ pub fn write_all(
         let side = (MAP_SIDE + MAP_LEGEND, MAP_SIDE);
         on_backend!(
             ext,
-            &map,
+            &map_file,
             side,
-            draw_map(samples, (walls, walls_label), &map_title, ellipse_sigma)
+            draw_map(samples, map, &map_title, ellipse_sigma)
         )
-        .with_context(|| format!("writing {}", map.display()))?;
+        .with_context(|| format!("writing {}", map_file.display()))?;
         on_backend!(ext, &errors, SIZE, draw_errors(samples, &err_title))
             .with_context(|| format!("writing {}", errors.display()))?;
         on_backend!(ext, &cov, SIZE, draw_covariance(samples, &cov_title))
             .with_context(|| format!("writing {}", cov.display()))?;
-        written.extend([map, errors, cov]);
+        written.extend([map_file, errors, cov]);
     }
     Ok(written)
 }

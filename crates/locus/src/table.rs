@@ -6,8 +6,6 @@
 use comfy_table::{Row, Table, presets::UTF8_FULL};
 use locus_eval::Summary;
 
-use crate::run::Info;
-
 /// An empty table in the commands' style with the column names `header`.
 pub fn with_header(header: impl Into<Row>) -> Table {
     let mut table = Table::new();
@@ -28,9 +26,10 @@ pub fn fig(v: f64, scale: f64, decimals: usize) -> String {
 }
 
 /// The two tables of a single run's summary: the estimators' errors and
-/// the filter's checks.
+/// the filter's checks; `estimator` labels the filter's row, `measurement`
+/// names the measurements counted (e.g. `IR`, `landmark`).
 #[must_use]
-pub fn summary(info: &Info, s: &Summary) -> String {
+pub fn summary((estimator, measurement): (&str, &str), s: &Summary) -> String {
     let mut table = with_header([
         "estimator",
         "position RMSE [cm]",
@@ -39,7 +38,7 @@ pub fn summary(info: &Info, s: &Summary) -> String {
     ]);
     let deg = 180.0 / core::f64::consts::PI;
     table.add_row(vec![
-        info.estimator.to_string(),
+        estimator.to_string(),
         fig(s.ekf_position_rmse, 100.0, 2),
         fig(s.ekf_heading_rmse, deg, 2),
         fig(s.ekf_max_position_error, 100.0, 2),
@@ -63,11 +62,8 @@ pub fn summary(info: &Info, s: &Summary) -> String {
             fig(s.nees_in_interval, 100.0, 1),
         ),
         (
-            format!(
-                "{} readings / associated / applied [count]",
-                info.measurement
-            ),
-            format!("{} / {} / {}", s.readings, s.associated, s.corrections),
+            format!("{measurement} readings / associated / applied [count]"),
+            format!("{} / {} / {}", s.readings, s.associated, s.applied),
         ),
         (
             "updates accepted by the gate [%]".to_string(),

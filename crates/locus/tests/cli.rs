@@ -93,7 +93,12 @@ fn run_square_prints_the_table_and_writes_a_rectangular_csv() {
     }
     assert!(rows > 1000, "{rows} rows");
     let metrics = std::fs::read_to_string(dir.join("metrics.json")).expect("metrics.json");
-    assert!(metrics.contains("\"ekf_position_rmse_m\""), "{metrics}");
+    let m: serde_json::Value = serde_json::from_str(&metrics).expect("metrics.json is JSON");
+    assert!(
+        m["filter"]["position_rmse_m"].as_f64().unwrap() > 0.0,
+        "{metrics}"
+    );
+    assert_eq!(m["simulation"]["seed"], 1, "{metrics}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -245,10 +250,18 @@ fn run_monte_carlo_prints_the_table_and_writes_runs_csv() {
     seeds.sort_unstable();
     assert_eq!(seeds, [7, 8, 9, 10]);
     let metrics = std::fs::read_to_string(dir.join("metrics.json")).expect("metrics.json");
-    assert!(metrics.contains("\"runs\": 4"), "{metrics}");
+    let m: serde_json::Value = serde_json::from_str(&metrics).expect("metrics.json is JSON");
+    assert_eq!(m["source"], "monte_carlo", "{metrics}");
+    assert_eq!(m["monte_carlo"]["runs"], 4, "{metrics}");
+    assert_eq!(m["monte_carlo"]["first_seed"], 7, "{metrics}");
     assert!(
-        metrics.contains("\"ekf_position_rmse_m\": { \"mean\""),
+        metrics.contains("\"position_rmse_m\": { \"mean\""),
         "{metrics}"
+    );
+    let rmse = &m["filter"]["position_rmse_m"];
+    assert!(
+        rmse["min"].as_f64().unwrap() <= rmse["mean"].as_f64().unwrap(),
+        "{rmse}"
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -75,9 +75,13 @@ fn a_log_with_no_start_replays_from_its_sightings_and_a_wrong_start_is_named() {
     ));
     assert!(out.contains("initial pose from the first"), "{out}");
     let m = metrics(&path("bare"));
-    assert_eq!(m["start"]["from"], "sightings", "{}", m["start"]);
-    assert!(m["start"]["std"][0].as_f64().unwrap() > 0.0);
-    assert!(m["ekf_position_rmse_m"].is_null());
+    assert_eq!(
+        m["replay"]["start"]["from"], "sightings",
+        "{}",
+        m["replay"]["start"]
+    );
+    assert!(m["replay"]["start"]["std"][0].as_f64().unwrap() > 0.0);
+    assert!(m["filter"]["position_rmse_m"].is_null());
 
     // The same start with the truth kept (to score it) is as accurate as
     // the true start: within 5 % of its position RMSE.
@@ -94,24 +98,26 @@ fn a_log_with_no_start_replays_from_its_sightings_and_a_wrong_start_is_named() {
     };
     let from_truth = scored(&export, "truth", &[]);
     let from_sightings = scored(&export, "sightings", &["--start-from-sightings"]);
-    assert_eq!(from_truth["start"]["from"], "truth");
-    assert_eq!(from_sightings["start"]["from"], "sightings");
+    assert_eq!(from_truth["replay"]["start"]["from"], "truth");
+    assert_eq!(from_sightings["replay"]["start"]["from"], "sightings");
     let (a, b) = (
-        from_sightings["ekf_position_rmse_m"].as_f64().unwrap(),
-        from_truth["ekf_position_rmse_m"].as_f64().unwrap(),
+        from_sightings["filter"]["position_rmse_m"]
+            .as_f64()
+            .unwrap(),
+        from_truth["filter"]["position_rmse_m"].as_f64().unwrap(),
     );
     println!(
         "robot 3, position RMSE from the sightings' start {a:.4} m, from the true start {b:.4} m"
     );
     assert!(a <= 1.05 * b, "{a} against {b}");
     assert_eq!(
-        from_sightings["start"]["pose"], m["start"]["pose"],
+        from_sightings["replay"]["start"]["pose"], m["replay"]["start"]["pose"],
         "the same fix with or without the truth in the log"
     );
 
     // A start record that contradicts the first sightings is named; one
     // that agrees is not.
-    let fix = &m["start"]["pose"];
+    let fix = &m["replay"]["start"]["pose"];
     let t0 = bare_text_first_odometry(&fs::read_to_string(&bare).unwrap());
     for (name, dx, dtheta, warned) in [("wrong", 3.0, 1.5, true), ("right", 0.0, 0.0, false)] {
         let file = path(&format!("{name}.csv"));
@@ -134,7 +140,7 @@ fn a_log_with_no_start_replays_from_its_sightings_and_a_wrong_start_is_named() {
             warned,
             "{name}: {out}"
         );
-        assert_eq!(metrics(&path(name))["start"]["from"], "log");
+        assert_eq!(metrics(&path(name))["replay"]["start"]["from"], "log");
     }
     let _ = fs::remove_dir_all(&dir);
 }

@@ -55,37 +55,39 @@ fn the_uwb_log_replays_position_only_and_every_range_is_accounted_for() {
     ]));
     let m = metrics(&out);
     // Every range applied, gated or counted as refused, skipped or too late.
-    let counted: u64 = [
-        "applied",
-        "gated",
-        "not_in_map",
-        "unusable",
-        "implausible_time",
-        "too_late",
-        "unknown_sightings",
-    ]
-    .iter()
-    .map(|k| m[*k].as_u64().expect(k))
-    .sum();
+    let replay = &m["replay"];
+    let counted: u64 = m["counts"]["applied"].as_u64().expect("applied")
+        + [
+            "gated",
+            "not_in_map",
+            "unusable",
+            "implausible_time",
+            "too_late",
+            "unknown_sightings",
+        ]
+        .iter()
+        .map(|k| replay[*k].as_u64().expect(k))
+        .sum::<u64>();
     assert_eq!(counted, ranges as u64, "{m}");
     assert_eq!(
-        m["sightings"].as_u64().unwrap() + m["too_late"].as_u64().unwrap(),
+        m["counts"]["readings"].as_u64().unwrap() + replay["too_late"].as_u64().unwrap(),
         ranges as u64
     );
-    assert!(m["compared"].as_u64().unwrap() > 400, "{m}");
+    let filter = &m["filter"];
+    assert!(filter["compared"].as_u64().unwrap() > 400, "{m}");
     // Position only: no heading figure, never 0; the NEES over x and y.
     for key in [
-        "ekf_heading_rmse_rad",
-        "ekf_heading_offset_rad",
-        "ekf_heading_rmse_about_offset_rad",
-        "odometry_heading_rmse_rad",
+        "heading_rmse_rad",
+        "heading_offset_rad",
+        "heading_rmse_about_offset_rad",
     ] {
-        assert!(m[key].is_null(), "{key}: {}", m[key]);
+        assert!(filter[key].is_null(), "{key}: {}", filter[key]);
     }
-    assert_eq!(m["nees_dof"], 2);
-    assert!(m["mean_nees"].as_f64().unwrap() > 0.0);
-    let filter = m["ekf_position_rmse_m"].as_f64().unwrap();
-    let odometry = m["odometry_position_rmse_m"].as_f64().unwrap();
+    assert!(m["odometry"]["heading_rmse_rad"].is_null(), "{m}");
+    assert_eq!(filter["nees_dof"], 2);
+    assert!(filter["mean_nees"].as_f64().unwrap() > 0.0);
+    let odometry = m["odometry"]["position_rmse_m"].as_f64().unwrap();
+    let filter = filter["position_rmse_m"].as_f64().unwrap();
     assert!(filter.is_finite() && filter > 0.0, "{m}");
     assert!(odometry.is_finite() && odometry > 0.0, "{m}");
     // Issue 27: with no flags, better than odometry alone, and honest: x
@@ -112,7 +114,7 @@ fn the_uwb_log_replays_position_only_and_every_range_is_accounted_for() {
         .collect();
     assert_eq!(shares.len(), 2, "{row}");
     assert!(shares.iter().all(|s| *s >= 90.0), "{row}");
-    assert_eq!(m["start"]["from"], "truth_position", "{m}");
+    assert_eq!(m["replay"]["start"]["from"], "truth_position", "{m}");
     assert!(stdout.contains("odometry alone"), "{stdout}");
     assert!(stdout.contains("mean NEES (2 dof, ideal 2)"), "{stdout}");
     // The 3-sigma share of the heading reads n/a.
@@ -141,8 +143,8 @@ fn the_uwb_log_replays_position_only_and_every_range_is_accounted_for() {
         "--no-plots",
     ]));
     let m2 = metrics(&again);
-    assert_eq!(m2["ekf_position_rmse_m"], m["ekf_position_rmse_m"]);
-    assert_eq!(m2["applied"], m["applied"]);
+    assert_eq!(m2["filter"], m["filter"]);
+    assert_eq!(m2["counts"], m["counts"]);
 
     // Range-only sightings alone, no start, no truth: no initial pose.
     let bare = path("bare.csv");

@@ -49,7 +49,7 @@ fn estimated(out: &Path) -> [f64; 5] {
         "sigma_bearing_rad",
         "odometry_delay_s",
     ]
-    .map(|k| m[k].as_f64().unwrap())
+    .map(|k| m["replay"][k].as_f64().unwrap())
 }
 
 const LABELS: [&str; 5] = [

@@ -1,41 +1,52 @@
-//! `metrics.json`'s replay fields: the settings, the counts and where the
-//! initial pose came from.
+//! `metrics.json`'s replay sections: the filter's calibration and the
+//! `replay` section (the settings, the counts only a replay has and where
+//! the initial pose came from).
 
+use locus_eval::results::Calibration;
 use locus_replay::{Config, Report, StartedFrom};
 use serde::Serialize;
 
-/// The replay's fields of `metrics.json`, after the summary's: its
-/// settings and counts.
+/// The replay's sections of `metrics.json`, after the results.
 #[derive(Serialize)]
-pub(super) struct ReplayMetrics {
-    /// Always `replay`.
-    source: &'static str,
+pub(super) struct ReplaySection {
+    /// The filter's final calibration.
+    calibration: Calibration,
+    /// The replay's settings and counts.
+    replay: Replay,
+}
+
+/// `metrics.json`'s `replay`: the settings replayed with, the counts of
+/// what happened to the log's records beyond the results' `counts`
+/// (whose `readings` are the sightings replayed and `applied` those
+/// applied), and where the initial pose came from.
+#[derive(Serialize)]
+struct Replay {
     /// Chi-square gate confidence; `null` without a gate.
     gate_confidence: Option<f64>,
     q_v_m2_per_s: f64,
     q_omega_rad2_per_s: f64,
     sigma_range_m: f64,
     sigma_bearing_rad: f64,
-    /// The filter's final `(mean, std)` of the forward-speed scale, the
-    /// turn-rate scale, the turn-rate bias (rad/s), the bearing bias (rad).
-    calibration: [(f64, f64); 4],
-    /// The smoother's summary (with `--smooth`).
-    smoothed: Option<locus_eval::Summary>,
     /// The odometry delay replayed with, s.
     odometry_delay_s: f64,
     /// Where the initial pose came from.
     start: StartMetrics,
-    events: usize,
-    compared: usize,
-    sightings: usize,
-    applied: usize,
+    /// Odometry records replayed.
+    odometry_records: usize,
+    /// Sightings the gate rejected.
     gated: usize,
+    /// `gated / (applied + gated)`, 0 when none reached the gate.
     gated_share: f64,
+    /// Covariance inflations (recoveries).
     inflations: usize,
+    /// Sightings applied only after an inflation.
+    recovered: usize,
     robot_sightings: usize,
     unknown_sightings: usize,
     not_in_map: usize,
+    /// Sightings that arrived out of order and were applied at their time.
     late: usize,
+    /// Sightings older than the history, not applied.
     too_late: usize,
     /// Sightings the filter could not use (refused, listed with their line).
     unusable: usize,
@@ -47,35 +58,33 @@ pub(super) struct ReplayMetrics {
     implausible_odometry: usize,
 }
 
-impl ReplayMetrics {
+impl ReplaySection {
     pub(super) fn new(cfg: &Config, r: &Report) -> Self {
         Self {
-            source: "replay",
-            gate_confidence: cfg.gate,
-            q_v_m2_per_s: cfg.q_v,
-            q_omega_rad2_per_s: cfg.q_omega,
-            sigma_range_m: cfg.sigma_range,
-            sigma_bearing_rad: cfg.sigma_bearing,
-            calibration: r.calibration,
-            smoothed: r.smoothed,
-            odometry_delay_s: cfg.odometry_delay,
-            start: StartMetrics::new(&r.started_from),
-            events: r.steps,
-            compared: r.compared,
-            sightings: r.sightings,
-            applied: r.applied,
-            gated: r.gated,
-            gated_share: r.gated_share(),
-            inflations: r.inflations,
-            robot_sightings: r.robot_sightings,
-            unknown_sightings: r.unknown_sightings,
-            not_in_map: r.not_in_map,
-            late: r.late,
-            too_late: r.too_late,
-            unusable: r.unusable,
-            implausible_time: r.implausible_time,
-            no_measurement: r.no_measurement,
-            implausible_odometry: r.implausible_odometry,
+            calibration: Calibration::from_pairs(r.calibration),
+            replay: Replay {
+                gate_confidence: cfg.gate,
+                q_v_m2_per_s: cfg.q_v,
+                q_omega_rad2_per_s: cfg.q_omega,
+                sigma_range_m: cfg.sigma_range,
+                sigma_bearing_rad: cfg.sigma_bearing,
+                odometry_delay_s: cfg.odometry_delay,
+                start: StartMetrics::new(&r.started_from),
+                odometry_records: r.odometry,
+                gated: r.gated,
+                gated_share: r.gated_share(),
+                inflations: r.inflations,
+                recovered: r.recovered,
+                robot_sightings: r.robot_sightings,
+                unknown_sightings: r.unknown_sightings,
+                not_in_map: r.not_in_map,
+                late: r.late,
+                too_late: r.too_late,
+                unusable: r.unusable,
+                implausible_time: r.implausible_time,
+                no_measurement: r.no_measurement,
+                implausible_odometry: r.implausible_odometry,
+            },
         }
     }
 }

@@ -13,21 +13,21 @@ use anyhow::{Context, Result};
 use clap::{Args as ClapArgs, Subcommand};
 use comfy_table::Table;
 use locus_eval::Sample;
+use locus_eval::results::Results;
 use locus_logs::mrclam::Dataset;
-use locus_models::laser_wall::Segment;
 use locus_models::plausible::Limits;
 use locus_replay::{Config, Log, Report, Start, StartedFrom, replay};
 
 mod csv_writer;
 mod json;
 
-use crate::metrics::{self, RunMetrics, Settings};
+use crate::metrics::{self, Metrics};
 use crate::output::{print_out, progress_bar};
 use crate::plot::PictureArgs;
-use crate::run::{Info, files_written};
+use crate::run::files_written;
 use crate::table::with_header;
 use csv_writer::CsvWriter;
-use json::ReplayMetrics;
+use json::ReplaySection;
 
 /// Arguments of `locus replay`.
 #[derive(ClapArgs, Debug)]
@@ -365,18 +365,9 @@ fn calibrate(log: &Log, common: &Common) -> Result<(Config, String)> {
     Ok((settled.config, text))
 }
 
-/// The landmarks as crosses of 0.3 m for the map.
-fn crosses(log: &Log) -> Vec<Segment<f64>> {
-    const HALF: f64 = 0.15;
-    log.landmarks
-        .iter()
-        .flat_map(|l| {
-            [
-                Segment::new([l.x - HALF, l.y], [l.x + HALF, l.y]),
-                Segment::new([l.x, l.y - HALF], [l.x, l.y + HALF]),
-            ]
-        })
-        .collect()
+/// The log's landmarks, `[x, y]` (m), for the map.
+fn landmarks(log: &Log) -> Vec<[f64; 2]> {
+    log.landmarks.iter().map(|l| [l.x, l.y]).collect()
 }
 
 fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str) -> Result<()> {
@@ -460,25 +451,16 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
     })?;
     bar.finish_and_clear();
 
-    #[allow(clippy::cast_precision_loss)]
-    let dt = log.duration() / log.odometry.len().max(1) as f64;
-    let info = Info {
-        name: log.name.clone(),
-        title: "recorded log replayed through the EKF (unicycle + range-bearing)",
-        estimator: "EKF (odometry + landmarks)",
-        measurement: "landmark",
-        dt,
-        laps: None,
-        walls: crosses(log),
-        map_label: "landmarks",
-    };
+    let landmarks = landmarks(log);
+    let results = Results::of(&report.summary).with_smoother(report.smoothed.as_ref());
     let metrics_path = metrics::write(
         out,
-        &RunMetrics {
-            settings: Settings::of(&info),
-            summary: report.summary,
-            extra: ReplayMetrics::new(cfg, &report),
-        },
+        &Metrics::new(
+            metrics::Source::Replay,
+            &log.name,
+            results,
+            ReplaySection::new(cfg, &report),
+        ),
     )?;
 
     let pictures = if common.pictures.no_plots || samples.is_empty() {
@@ -488,7 +470,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
         let mut written = crate::plot::write_all(
             out,
             &samples,
-            (&info.walls, info.map_label),
+            crate::plot::Map::Landmarks(&landmarks),
             &title,
             common.pictures.ellipse_sigma,
         )?;
@@ -507,7 +489,10 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
     );
     text.push_str(&started_from(&report.started_from));
     text.push_str(&start_check(log, cfg, &report.started_from));
-    text.push_str(&crate::table::summary(&info, &report.summary));
+    text.push_str(&crate::table::summary(
+        ("EKF (odometry + landmarks)", "landmark"),
+        &report.summary,
+    ));
     text.push_str(&format!("{}\n", honesty_table(&report)));
     text.push_str(estimated);
     text.push_str(&format!("{}\n", calibration_table(&report)));
@@ -685,7 +670,7 @@ fn honesty_table(r: &Report) -> Table {
         rows.push(("smoother", s));
     }
     for (name, s) in rows {
-        let shares = if s.steps == 0 {
+        let shares = if s.compared == 0 {
             "n/a".to_string()
         } else {
             s.within_3_sigma
@@ -694,7 +679,7 @@ fn honesty_table(r: &Report) -> Table {
                 .collect::<Vec<_>>()
                 .join(" / ")
         };
-        let (rmse, heading, nees) = if s.steps == 0 {
+        let (rmse, heading, nees) = if s.compared == 0 {
             (f64::NAN, f64::NAN, f64::NAN)
         } else {
             (s.ekf_position_rmse, s.ekf_heading_rmse, s.mean_nees)

@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::Args;
 use locus_core::wrap_angle;
+use locus_eval::results::Results;
 use locus_eval::{Record, Sample, Summary};
 use locus_models::laser_wall::Segment;
 use locus_sim::closed_loop::{SquareConfig, run_square};
@@ -29,7 +30,7 @@ use locus_sim::wall45::run_wall45;
 
 pub(crate) use self::monte_carlo::seeds;
 use crate::args::ScenarioArg;
-use crate::metrics::{self, RunMetrics, Settings};
+use crate::metrics::{self, Metrics, Simulation, SimulationSection, Source};
 use crate::output::print_out;
 use crate::plot::PictureArgs;
 
@@ -100,9 +101,6 @@ pub struct Info {
     pub laps: Option<usize>,
     /// The map's walls (m, world frame), for the pictures.
     pub walls: Vec<Segment<f64>>,
-    /// What the map's segments are, for the picture's legend (`walls`, or
-    /// `landmarks` drawn as crosses).
-    pub map_label: &'static str,
 }
 
 /// The square scenario's configuration with the command-line overrides.
@@ -137,7 +135,6 @@ impl Info {
             dt,
             laps: None,
             walls,
-            map_label: "walls",
         }
     }
 }
@@ -320,16 +317,21 @@ where
     flushed.with_context(|| format!("writing {}", csv_path.display()))?;
     let summary = result.with_context(|| format!("{} run", info.name))?;
 
+    let section = SimulationSection {
+        simulation: Simulation {
+            seed: Some(args.seed),
+            laps_completed: info.laps.map(|_| summary.laps_completed),
+            ..Simulation::of(info)
+        },
+    };
     let metrics_path = metrics::write(
         out,
-        &RunMetrics {
-            settings: Settings {
-                seed: Some(args.seed),
-                ..Settings::of(info)
-            },
-            summary,
-            extra: (),
-        },
+        &Metrics::new(
+            Source::Simulation,
+            &info.name,
+            Results::of(&summary),
+            section,
+        ),
     )?;
 
     let pictures = if args.pictures.no_plots {
@@ -339,7 +341,7 @@ where
         crate::plot::write_all(
             out,
             &samples,
-            (&info.walls, info.map_label),
+            crate::plot::Map::Walls(&info.walls),
             &title,
             args.pictures.ellipse_sigma,
         )?
@@ -384,8 +386,11 @@ fn summary_text(args: &RunArgs, info: &Info, s: &Summary) -> String {
         .map_or_else(String::new, |_| format!(", {} laps", s.laps_completed));
     let mut text = format!(
         "locus run {}: {}, seed {}, {} steps of {} s ({:.1} s simulated{laps})\n",
-        info.name, info.title, args.seed, s.steps, info.dt, s.sim_time
+        info.name, info.title, args.seed, s.steps, info.dt, s.duration
     );
-    text.push_str(&crate::table::summary(info, s));
+    text.push_str(&crate::table::summary(
+        (info.estimator, info.measurement),
+        s,
+    ));
     text
 }
