@@ -72,6 +72,7 @@ pub mod initial;
 pub mod log;
 pub mod noise;
 pub mod policy;
+pub mod refusals;
 mod report;
 mod smoother;
 mod step;
@@ -91,7 +92,8 @@ use locus_models::unicycle::{Unicycle, Velocities};
 
 pub use config::{Calibration, Config, Start};
 pub use log::{Landmark, Log, RefusedRecord, RefusedTime, Sighting, TIME_TOLERANCE, TimeProblem};
-pub use report::{Report, StartedFrom};
+pub use refusals::{Refusal, Refusals};
+pub use report::{Report, StartDisagreement, StartedFrom};
 pub use step::{EventKind, SightingOutcome, Step, Unusable};
 
 /// Cap on one sighting's NIS in [`Report::innovation_nll`]: the 99.9 %
@@ -604,7 +606,14 @@ impl<'a> Engine<'a> {
                     SightingOutcome::Gated { .. } => r.gated += 1,
                     SightingOutcome::NotInMap => r.not_in_map += 1,
                     SightingOutcome::NoMeasurement => r.no_measurement += 1,
-                    SightingOutcome::Unusable(_) => r.unusable += 1,
+                    SightingOutcome::Unusable(why) => {
+                        r.unusable += 1;
+                        r.refusals.push(Refusal::Sighting {
+                            line,
+                            sighting,
+                            why,
+                        });
+                    }
                 }
                 EventKind::Sighting {
                     sighting,
@@ -722,6 +731,38 @@ fn initial_pose(
         reason,
     })?;
     Ok((fix.pose, fix.covariance, StartedFrom::Sightings(fix)))
+}
+
+/// The records refused before the replay: implausible noise records,
+/// implausible odometry records, sightings with implausible time stamps.
+fn refusals_before(log: &Log, cfg: &Config) -> Refusals {
+    let mut r = Refusals::default();
+    let records = log.refused_noise.iter().copied();
+    for record in records.chain(log.refused_odometry(&cfg.limits)) {
+        r.push(Refusal::Record(record));
+    }
+    for time in &log.refused_times {
+        r.push(Refusal::Time(*time));
+    }
+    r
+}
+
+/// The log's start pose against where its first sightings put the robot,
+/// when the replay started from that pose and the two disagree beyond
+/// [`initial::DISAGREE`]; else `None` (also when the sightings fix no
+/// pose).
+fn start_disagreement(log: &Log, cfg: &Config, from: &StartedFrom) -> Option<StartDisagreement> {
+    let (StartedFrom::Log, Some(start)) = (from, log.start) else {
+        return None;
+    };
+    let fix = initial::from_sightings(log, cfg).ok()?;
+    let pose = Vector3::new(start.x, start.y, start.theta);
+    let d2 = fix.distance2(&pose, cfg.initial_std);
+    (d2 > initial::DISAGREE).then(|| StartDisagreement {
+        log: [start.x, start.y, start.theta],
+        sightings: [fix.pose[0], fix.pose[1], fix.pose[2]],
+        sigma: d2.sqrt(),
+    })
 }
 
 /// Replays `log` with `cfg`, handing each step (in canonical time order,
@@ -881,6 +922,7 @@ pub fn replay_in_segments(
             unusable: 0,
             implausible_time: log.refused_times.len(),
             implausible_odometry: 0,
+            refusals: refusals_before(log, cfg),
             robot_sightings: log.robot_sightings,
             unknown_sightings: log.unknown_sightings,
             late: 0,
@@ -890,6 +932,7 @@ pub fn replay_in_segments(
             calibration: calibration_of(&belief),
             smoothed_calibration: None,
             started_from,
+            start_disagreement: start_disagreement(log, cfg, &started_from),
             smoothing_held: 0,
             smoothing_checkpoints: 0,
         },

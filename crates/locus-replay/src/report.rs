@@ -4,7 +4,7 @@ use locus_core::Belief;
 use locus_eval::Summary;
 
 /// What a replay did, besides the per-step figures.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Report {
     /// Errors against the ground truth (over the steps it covers), as for
     /// `locus run`; NaN (printed "n/a", `null` in JSON) for every figure
@@ -50,6 +50,11 @@ pub struct Report {
     /// ([`Log::odometry_problem`](crate::Log::odometry_problem)): not
     /// applied, the velocities before each held.
     pub implausible_odometry: usize,
+    /// Every record refused (noise and odometry records with implausible
+    /// values, sightings with implausible time stamps, sightings the
+    /// filter cannot use), the first [`KEPT`](crate::refusals::KEPT) with
+    /// their line.
+    pub refusals: crate::refusals::Refusals,
     /// Robot-to-robot sightings left out by the log.
     pub robot_sightings: usize,
     /// Sightings of unknown targets left out by the log.
@@ -77,6 +82,12 @@ pub struct Report {
     pub smoothed_calibration: Option<[(f64, f64); 4]>,
     /// Where the initial pose came from.
     pub started_from: StartedFrom,
+    /// When the replay started from the log's `start` pose and the log's
+    /// first sightings fix a pose that contradicts it (beyond the 99.9 %
+    /// chi-square(3) bound of both uncertainties): the two poses. A
+    /// start record that is wrong is the user's to notice; the replay
+    /// keeps it.
+    pub start_disagreement: Option<StartDisagreement>,
     /// With [`Config::smooth`](crate::Config::smooth): the most steps the
     /// smoother held at once (one segment's, see
     /// [`replay_in_segments`](crate::replay_in_segments)); 0 without.
@@ -100,6 +111,21 @@ pub enum StartedFrom {
     TruthPosition(crate::initial::TruthHeading),
     /// The first sightings ([`crate::initial`]).
     Sightings(crate::initial::Fix),
+}
+
+/// The log's start pose against the pose its first sightings fix
+/// ([`crate::initial::from_sightings`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StartDisagreement {
+    /// The log's start: x, y (m), heading (rad).
+    pub log: [f64; 3],
+    /// The sightings' fix at the first odometry time: x, y (m), heading
+    /// (rad).
+    pub sightings: [f64; 3],
+    /// Their distance in standard deviations of both uncertainties
+    /// (the square root of [`crate::initial::Fix::distance2`]); above
+    /// `sqrt(`[`crate::initial::DISAGREE`]`)`.
+    pub sigma: f64,
 }
 
 impl Report {

@@ -183,7 +183,7 @@ pub(crate) fn flush<'a>(
     {
         checkpoints.pop();
     }
-    let report = engine.report;
+    let report = engine.report.clone();
     let model = engine.cfg.motion_model();
     let fresh = Tally::new(3).map_err(|_| Error::InvalidConfig("NEES degrees of freedom"))?;
     let mut held = report.smoothing_held;

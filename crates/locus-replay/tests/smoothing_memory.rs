@@ -116,7 +116,7 @@ fn the_smoother_holds_one_segment_and_gives_the_whole_log_smoothers_results_to_t
         for (k, (a, b)) in parts.iter().zip(&whole).enumerate() {
             assert_eq!(a, b, "segment {segment}, step {k}");
         }
-        assert_eq!(comparable(report), comparable(whole_report));
+        assert_eq!(comparable(report), comparable(whole_report.clone()));
     }
     // Not smoothing holds nothing.
     let mut count = 0;

@@ -16,7 +16,7 @@ use locus_eval::Sample;
 use locus_eval::results::Results;
 use locus_logs::mrclam::Dataset;
 use locus_models::plausible::Limits;
-use locus_replay::{Config, Log, Report, Start, StartedFrom, replay};
+use locus_replay::{Config, Log, Refusals, Report, Start, StartedFrom, replay};
 
 mod csv_writer;
 mod json;
@@ -379,61 +379,10 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
     let total = (log.odometry.len() + log.sightings.len()) as u64;
     let bar = progress_bar(total, "{pos}/{len} events, {elapsed} elapsed")?;
     let mut samples: Vec<Sample> = Vec::new();
-    let mut refused = Refused::default();
-    for r in &log.refused_noise {
-        refused.push(|| {
-            format!(
-                "{}: {} refused: implausible, {} (the level left to the flags, the estimate or the default)",
-                place(&log.name, r.line),
-                r.what,
-                r.why
-            )
-        });
-    }
-    for r in log.refused_odometry(&cfg.limits) {
-        refused.push(|| {
-            format!(
-                "{}: odometry record refused: implausible, {} (the velocities before it held)",
-                place(&log.name, r.line),
-                r.why
-            )
-        });
-    }
-    for r in &log.refused_times {
-        refused.push(|| {
-            format!(
-                "{}: sighting of landmark {} at {} s refused: implausible time stamp, {}",
-                place(&log.name, r.line),
-                r.landmark,
-                number(r.time),
-                r.problem
-            )
-        });
-    }
     let report = std::thread::scope(|scope| -> Result<Report> {
         let smoothed = cfg.smooth.then_some(smoothed_path.as_path());
         let mut writer = CsvWriter::start(scope, &csv_path, smoothed)?;
         let report = replay(log, cfg, |step| {
-            if let locus_replay::EventKind::Sighting {
-                sighting,
-                outcome: locus_replay::SightingOutcome::Unusable(why),
-                line,
-            } = step.kind
-            {
-                let bearing = sighting
-                    .bearing
-                    .map_or_else(String::new, |b| format!(", bearing {} rad", number(b)));
-                refused.push(|| {
-                    format!(
-                        "{}: sighting of landmark {} at {} s (range {} m{bearing}) refused: \
-                         the filter cannot use it: {why}",
-                        place(&log.name, line),
-                        sighting.landmark,
-                        number(sighting.time),
-                        number(sighting.range),
-                    )
-                });
-            }
             if step.index % 4096 == 0 {
                 bar.set_position(step.index as u64);
             }
@@ -488,7 +437,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
         report.compared
     );
     text.push_str(&started_from(&report.started_from));
-    text.push_str(&start_check(log, cfg, &report.started_from));
+    text.push_str(&start_check(&report));
     text.push_str(&crate::table::summary(
         ("EKF (odometry + landmarks)", "landmark"),
         &report.summary,
@@ -497,7 +446,7 @@ fn execute(log: &Log, cfg: &Config, common: &Common, out: &Path, estimated: &str
     text.push_str(estimated);
     text.push_str(&format!("{}\n", calibration_table(&report)));
     text.push_str(&format!("{}\n", counts_table(cfg, &report)));
-    text.push_str(&refused_list(&refused));
+    text.push_str(&refused_list(&log.name, &report.refusals));
     text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
     if cfg.smooth {
         text.push_str(&format!("smoothed: {}\n", smoothed_path.display()));
@@ -551,31 +500,16 @@ fn started_from(from: &StartedFrom) -> String {
 }
 
 /// A warning when the log's start pose contradicts where its first
-/// sightings put the robot (beyond the 99.9 % chi-square(3) bound of both
-/// uncertainties), else nothing.
-fn start_check(log: &Log, cfg: &Config, from: &StartedFrom) -> String {
-    let (StartedFrom::Log, Some(start)) = (from, log.start) else {
+/// sightings put the robot ([`Report::start_disagreement`]), else nothing.
+fn start_check(report: &Report) -> String {
+    let Some(d) = report.start_disagreement else {
         return String::new();
     };
-    let Ok(fix) = locus_replay::initial::from_sightings(log, cfg) else {
-        return String::new();
-    };
-    let pose = locus_core::nalgebra::Vector3::new(start.x, start.y, start.theta);
-    let d2 = fix.distance2(&pose, cfg.initial_std);
-    if d2 <= locus_replay::initial::DISAGREE {
-        return String::new();
-    }
     format!(
         "warning: the log's start pose ({:.3} m, {:.3} m, {:.3} rad) is {:.1} sigma from where its first \
          sightings put the robot ({:.3} m, {:.3} m, {:.3} rad); if the start record is wrong, \
          replay with --start-from-sightings\n",
-        start.x,
-        start.y,
-        start.theta,
-        d2.sqrt(),
-        fix.pose[0],
-        fix.pose[1],
-        fix.pose[2]
+        d.log[0], d.log[1], d.log[2], d.sigma, d.sightings[0], d.sightings[1], d.sightings[2]
     )
 }
 
@@ -585,52 +519,20 @@ fn place(name: &str, line: Option<usize>) -> String {
     line.map_or_else(|| name.to_string(), |l| format!("{name}:{l}"))
 }
 
-/// A logged value for a message: as written if of ordinary size, else in
-/// scientific notation (a range of 1e154 m is not spelt out in 155 digits).
-fn number(v: f64) -> String {
-    if v == 0.0 || (1e-4..1e12).contains(&v.abs()) {
-        format!("{v}")
-    } else {
-        format!("{v:e}")
-    }
-}
-
-/// Refused records listed at most.
-const REFUSED_SHOWN: usize = 20;
-
-/// The refused records: how many, and the first [`REFUSED_SHOWN`]
-/// described (a log of millions of refused lines keeps 20 strings).
-#[derive(Default)]
-struct Refused {
-    shown: Vec<String>,
-    total: usize,
-}
-
-impl Refused {
-    /// Counts one, described by `describe` if it is among the first.
-    fn push(&mut self, describe: impl FnOnce() -> String) {
-        if self.shown.len() < REFUSED_SHOWN {
-            self.shown.push(describe());
-        }
-        self.total += 1;
-    }
-}
-
-/// The refused records, one line each (the first [`REFUSED_SHOWN`]).
-fn refused_list(refused: &Refused) -> String {
-    if refused.total == 0 {
+/// The refused records, one line each (the first
+/// [`KEPT`](locus_replay::refusals::KEPT)).
+fn refused_list(name: &str, refusals: &Refusals) -> String {
+    if refusals.total() == 0 {
         return String::new();
     }
-    let mut text = format!("refused records ({}):\n", refused.total);
-    for r in &refused.shown {
-        text.push_str("  ");
-        text.push_str(r);
-        text.push('\n');
+    let mut text = format!("refused records ({}):\n", refusals.total());
+    for r in refusals.first() {
+        text.push_str(&format!("  {}: {r}\n", place(name, r.line())));
     }
-    if refused.total > refused.shown.len() {
+    if refusals.total() > refusals.first().len() {
         text.push_str(&format!(
             "  ... and {} more\n",
-            refused.total - refused.shown.len()
+            refusals.total() - refusals.first().len()
         ));
     }
     text
