@@ -2,7 +2,7 @@
 //! `locus replay` through serde (`serde_json`), in the one schema of
 //! [`locus_eval::results`] (`docs/metrics.schema.json`, `docs/results.md`):
 //! the [`SCHEMA`] tag, the source and its name, the source-neutral
-//! [`Results`], then the section of the source (`simulation`,
+//! [`Results`](locus_eval::results::Results), then the section of the source (`simulation`,
 //! `monte_carlo`, `replay`). Figures in SI units under keys that name the
 //! unit; a figure that cannot be computed (NaN) is `null`, never 0.
 //!
