@@ -66,7 +66,9 @@
 extern crate alloc;
 
 mod config;
+pub mod csv_out;
 mod dead_reckoning;
+mod describe;
 pub mod drift;
 pub mod initial;
 pub mod log;
@@ -74,6 +76,7 @@ pub mod noise;
 pub mod policy;
 pub mod refusals;
 mod report;
+pub mod results;
 mod smoother;
 mod step;
 

@@ -414,6 +414,23 @@ impl Log {
         Self::from_locus_lines(&name, log, lines)
     }
 
+    /// Reads a log in libRSF's text format (`range2` and `odom2diff` lines:
+    /// UWB ranges as range-only sightings, differential-drive odometry),
+    /// with the ground truth's `point2` lines from `truth` if given
+    /// (positions only). The ranges' declared variance is not used as the
+    /// noise.
+    ///
+    /// # Errors
+    /// Missing file (named), malformed line (file and line), an
+    /// implausible record ([`Log::from_locus`]).
+    pub fn librsf(input: &Path, truth: Option<&Path>) -> Result<Self, Error> {
+        let read = locus_logs::librsf::read(input, truth)?;
+        let name = input
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        Self::from_locus_lines(&name, read.log, read.lines)
+    }
+
     /// The log as a Locus CSV log (measurements in arrival order), e.g. to
     /// convert an MRCLAM robot into the format. The sensor is written only
     /// if it is not at the robot's centre ([`SensorMount::is_centred`]), so

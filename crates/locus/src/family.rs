@@ -145,7 +145,7 @@ fn run_member(member: &Member, seed: u64, estimate: Estimate, out: Option<&Path>
         }
         let (csv, lines) = locus_logs::locus_csv::parse_with_lines(&g.text, Path::new(&file))?;
         let log = Log::from_locus_lines(member.name, csv, lines)?;
-        let base = crate::replay::default_config();
+        let base = crate::args::replay::default_config();
         let no_flags = replay_with(
             &log,
             &base,

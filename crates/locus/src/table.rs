@@ -1,10 +1,13 @@
 //! The tables the commands print: one style for all ([`with_header`]), the
-//! figures in them ([`fig`]: `n/a` for a figure that cannot be computed)
-//! and the summary of a single run, shared by `locus run` and
-//! `locus replay` ([`summary`]).
+//! figures in them ([`fig`]: `n/a` for a figure that cannot be computed),
+//! the summary of a single run, shared by `locus run` and `locus replay`
+//! ([`summary`]), and tables of the results schema
+//! ([`locus_eval::results`]): the estimators' honesty ([`honesty`]) and
+//! the calibration ([`calibration`]).
 
 use comfy_table::{Row, Table, presets::UTF8_FULL};
 use locus_eval::Summary;
+use locus_eval::results::{Calibration, MeanStd, Results};
 
 /// An empty table in the commands' style with the column names `header`.
 pub fn with_header(header: impl Into<Row>) -> Table {
@@ -78,6 +81,85 @@ pub fn summary((estimator, measurement): (&str, &str), s: &Summary) -> String {
         filter.add_row(vec![name, value]);
     }
     format!("{table}\n{filter}\n")
+}
+
+/// Accuracy and honesty of the filter (and the smoother, if one ran):
+/// RMSE, and the share of steps whose error lies inside the estimator's own
+/// 3 sigma, and the mean NEES; "n/a" where nothing was compared.
+#[must_use]
+pub fn honesty(results: &Results) -> Table {
+    let mut t = with_header([
+        "estimate",
+        "position RMSE [m]",
+        "heading RMSE [rad]",
+        "heading RMSE about its offset [rad]",
+        "heading offset [rad]",
+        "inside 3 sigma x / y / theta [%] (theta about the offset)",
+        "mean NEES [-] (its dof if honest; about the offset)",
+    ]);
+    let rows = core::iter::once(("filter", results.filter))
+        .chain(results.smoother.map(|s| ("smoother", s)));
+    for (name, a) in rows {
+        // With nothing compared every figure is "n/a", whatever it holds.
+        let v = |x: f64| if a.compared == 0 { f64::NAN } else { x };
+        let shares = [
+            a.within_3_sigma_x_share,
+            a.within_3_sigma_y_share,
+            a.within_3_sigma_heading_share,
+        ]
+        .map(|s| fig(v(s), 100.0, 1))
+        .join(" / ");
+        t.add_row(vec![
+            name.to_string(),
+            fig(v(a.position_rmse_m), 1.0, 3),
+            fig(v(a.heading_rmse_rad), 1.0, 3),
+            fig(v(a.heading_rmse_about_offset_rad), 1.0, 3),
+            fig(v(a.heading_offset_rad), 1.0, 3),
+            format!(
+                "{shares} ({})",
+                fig(v(a.within_3_sigma_heading_about_offset_share), 100.0, 1)
+            ),
+            format!(
+                "{} ({} dof; {})",
+                fig(v(a.mean_nees), 1.0, 2),
+                a.nees_dof,
+                fig(v(a.mean_nees_about_offset), 1.0, 2)
+            ),
+        ]);
+    }
+    t
+}
+
+/// The calibration the filter estimated (at its end) and, if given, the
+/// smoother's (from the whole log): each term's mean +- its standard
+/// deviation.
+#[must_use]
+pub fn calibration(filter: &Calibration, smoother: Option<&Calibration>) -> Table {
+    fn terms(c: &Calibration) -> [MeanStd; 4] {
+        [
+            c.speed_scale,
+            c.turn_rate_scale,
+            c.turn_rate_bias_rad_per_s,
+            c.bearing_bias_rad,
+        ]
+    }
+    let names = [
+        "forward-speed scale [-]",
+        "turn-rate scale [-]",
+        "turn-rate bias [rad/s]",
+        "bearing bias [rad]",
+    ];
+    let pm = |m: MeanStd| format!("{:.4} +- {:.4}", m.mean, m.std);
+    let mut t = with_header(["calibration [unit]", "filter (end)", "smoother (whole log)"]);
+    let smoothed = smoother.map(terms);
+    for (i, (name, term)) in names.iter().zip(terms(filter)).enumerate() {
+        t.add_row(vec![
+            (*name).to_string(),
+            pm(term),
+            smoothed.map_or_else(|| "-".to_string(), |s| pm(s[i])),
+        ]);
+    }
+    t
 }
 
 #[cfg(test)]

@@ -3,7 +3,9 @@
 //! `invalid value 'X' for '--flag <F>': ...` and exits with code 2):
 //! `--ellipse-sigma -1` used to be refused only after the whole run.
 //! The scenario argument of `run`, `serve`, `robot` and `host`
-//! ([`ScenarioArg`]) is parsed here too.
+//! ([`ScenarioArg`]) is parsed here too, and the replay's flags, which
+//! `locus replay` parses and `locus tune` and `locus family` take the
+//! defaults of ([`replay`]).
 
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
@@ -11,6 +13,8 @@ use std::path::{Path, PathBuf};
 use clap::builder::{PossibleValue, TypedValueParser};
 use clap::error::ErrorKind;
 use locus_sim::scenario_file::{self, Scenario, ScenarioConfig, UnknownScenario};
+
+pub mod replay;
 
 /// A finite number (not NaN, not infinite).
 ///

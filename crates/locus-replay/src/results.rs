@@ -1,65 +1,82 @@
-//! `metrics.json`'s replay sections: the filter's calibration and the
-//! `replay` section (the settings, the counts only a replay has and where
-//! the initial pose came from).
+//! A replay's own sections of the results (`metrics.json`,
+//! `docs/results.md`), after the source-neutral
+//! [`Results`](locus_eval::results::Results): the filter's final
+//! calibration and the `replay` section (the settings replayed with, the
+//! counts only a replay has, where the initial pose came from). Figures in
+//! SI units under keys that name the unit; `null` where a figure does not
+//! apply.
 
 use locus_eval::results::Calibration;
-use locus_replay::{Config, Report, StartedFrom};
 use serde::Serialize;
 
-/// The replay's sections of `metrics.json`, after the results.
-#[derive(Serialize)]
-pub(super) struct ReplaySection {
+use crate::{Config, Report, StartedFrom};
+
+/// The replay's sections of the results, after the source-neutral ones.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Section {
     /// The filter's final calibration.
-    calibration: Calibration,
+    pub calibration: Calibration,
     /// The replay's settings and counts.
-    replay: Replay,
+    pub replay: Replay,
 }
 
-/// `metrics.json`'s `replay`: the settings replayed with, the counts of
-/// what happened to the log's records beyond the results' `counts`
-/// (whose `readings` are the sightings replayed and `applied` those
-/// applied), and where the initial pose came from.
-#[derive(Serialize)]
-struct Replay {
-    /// Chi-square gate confidence; `null` without a gate.
-    gate_confidence: Option<f64>,
-    q_v_m2_per_s: f64,
-    q_omega_rad2_per_s: f64,
-    sigma_range_m: f64,
-    sigma_bearing_rad: f64,
+/// The `replay` section: the settings replayed with, the counts of what
+/// happened to the log's records beyond the results' `counts` (whose
+/// `readings` are the sightings replayed and `applied` those applied), and
+/// where the initial pose came from.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Replay {
+    /// Chi-square gate confidence in (0, 1); `None` (`null`) without a
+    /// gate.
+    pub gate_confidence: Option<f64>,
+    /// Power spectral density of the forward-speed noise, m^2/s.
+    pub q_v_m2_per_s: f64,
+    /// Power spectral density of the turn-rate noise, rad^2/s.
+    pub q_omega_rad2_per_s: f64,
+    /// Range noise standard deviation, m.
+    pub sigma_range_m: f64,
+    /// Bearing noise standard deviation, rad.
+    pub sigma_bearing_rad: f64,
     /// The odometry delay replayed with, s.
-    odometry_delay_s: f64,
+    pub odometry_delay_s: f64,
     /// Where the initial pose came from.
-    start: StartMetrics,
+    pub start: Start,
     /// Odometry records replayed.
-    odometry_records: usize,
+    pub odometry_records: usize,
     /// Sightings the gate rejected.
-    gated: usize,
+    pub gated: usize,
     /// `gated / (applied + gated)`, 0 when none reached the gate.
-    gated_share: f64,
+    pub gated_share: f64,
     /// Covariance inflations (recoveries).
-    inflations: usize,
+    pub inflations: usize,
     /// Sightings applied only after an inflation.
-    recovered: usize,
-    robot_sightings: usize,
-    unknown_sightings: usize,
-    not_in_map: usize,
+    pub recovered: usize,
+    /// Robot-to-robot sightings left out by the log.
+    pub robot_sightings: usize,
+    /// Sightings of unknown targets left out by the log.
+    pub unknown_sightings: usize,
+    /// Sightings of landmarks not in the map (skipped).
+    pub not_in_map: usize,
     /// Sightings that arrived out of order and were applied at their time.
-    late: usize,
+    pub late: usize,
     /// Sightings older than the history, not applied.
-    too_late: usize,
+    pub too_late: usize,
     /// Sightings the filter could not use (refused, listed with their line).
-    unusable: usize,
+    pub unusable: usize,
     /// Sightings refused for an implausible time stamp.
-    implausible_time: usize,
+    pub implausible_time: usize,
     /// Sightings where the model predicts no measurement (skipped).
-    no_measurement: usize,
+    pub no_measurement: usize,
     /// Odometry records refused as implausible (listed with their line).
-    implausible_odometry: usize,
+    pub implausible_odometry: usize,
 }
 
-impl ReplaySection {
-    pub(super) fn new(cfg: &Config, r: &Report) -> Self {
+impl Section {
+    /// The sections of the replay that gave `report` with the settings
+    /// `cfg`.
+    #[must_use]
+    pub fn new(cfg: &Config, report: &Report) -> Self {
+        let r = report;
         Self {
             calibration: Calibration::from_pairs(r.calibration),
             replay: Replay {
@@ -69,7 +86,7 @@ impl ReplaySection {
                 sigma_range_m: cfg.sigma_range,
                 sigma_bearing_rad: cfg.sigma_bearing,
                 odometry_delay_s: cfg.odometry_delay,
-                start: StartMetrics::new(&r.started_from),
+                start: Start::new(&r.started_from),
                 odometry_records: r.odometry,
                 gated: r.gated,
                 gated_share: r.gated_share(),
@@ -89,30 +106,37 @@ impl ReplaySection {
     }
 }
 
-/// `metrics.json`'s `start`: where the initial pose came from (`log`,
-/// `truth`, `truth_position` (a truth with no heading: its heading from
-/// the direction of motion) or `sightings`), and for `sightings` the fix.
-#[derive(Serialize)]
-struct StartMetrics {
-    from: &'static str,
-    /// x, y (m) and heading (rad) at the first odometry time.
-    pose: Option<[f64; 3]>,
+/// The replay's `start`: where the initial pose came from (`log`, `truth`,
+/// `truth_position` (a truth with no heading: its heading from the
+/// direction of motion) or `sightings`), and for `sightings` the fix.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Start {
+    /// `log`, `truth`, `truth_position` or `sightings`.
+    pub from: &'static str,
+    /// x, y (m) and heading (rad) at the first odometry time (from the
+    /// sightings; for `truth_position`, the heading alone, x and y `null`).
+    pub pose: Option<[f64; 3]>,
     /// Their standard deviations (m, m, rad).
-    std: Option<[f64; 3]>,
-    sightings: Option<usize>,
-    inliers: Option<usize>,
+    pub std: Option<[f64; 3]>,
+    /// Sightings in the window that fixed the pose.
+    pub sightings: Option<usize>,
+    /// Those the fix agrees with.
+    pub inliers: Option<usize>,
     /// `inliers / sightings`.
-    inlier_share: Option<f64>,
-    landmarks: Option<usize>,
+    pub inlier_share: Option<f64>,
+    /// Landmarks the inliers see.
+    pub landmarks: Option<usize>,
     /// Largest distance between two landmarks the inliers see, m.
-    baseline_m: Option<f64>,
+    pub baseline_m: Option<f64>,
     /// From the first odometry time to the window's first sighting, s.
-    from_s: Option<f64>,
-    span_s: Option<f64>,
-    rms_m: Option<f64>,
+    pub from_s: Option<f64>,
+    /// The window's span (for `truth_position`, the motion's), s.
+    pub span_s: Option<f64>,
+    /// RMS of the inliers' residuals, m.
+    pub rms_m: Option<f64>,
 }
 
-impl StartMetrics {
+impl Start {
     fn new(from: &StartedFrom) -> Self {
         let none = |from| Self {
             from,

@@ -1,0 +1,220 @@
+//! The flags of `locus replay` (its sources, [`Source`], and the replay's
+//! options, [`Flags`]) and the settings they give ([`Flags::config`],
+//! [`Flags::overrides`]); `locus tune` and `locus family` replay with the
+//! flags' defaults ([`default_config`]).
+
+use std::path::PathBuf;
+
+use clap::{Args as ClapArgs, Subcommand};
+use locus_models::plausible::Limits;
+use locus_replay::policy::{Estimation, Overrides};
+use locus_replay::{Config, Start};
+
+use crate::plot::PictureArgs;
+
+/// The log replayed: its format and where it is.
+#[derive(Subcommand, Debug)]
+pub enum Source {
+    /// A robot of a UTIAS MRCLAM dataset directory (e.g.
+    /// `../shared/data/mrclam/MRCLAM_Dataset6`; files plain or `.xz`).
+    /// Robot-to-robot sightings and unknown barcodes are counted and left
+    /// out.
+    Mrclam {
+        /// The dataset directory.
+        dir: PathBuf,
+        /// The robot (1-5).
+        #[arg(long, default_value_t = 1)]
+        robot: u32,
+        /// Also write the robot's log in Locus's CSV format to this file
+        /// (docs/log-format.md).
+        #[arg(long)]
+        export: Option<PathBuf>,
+        #[command(flatten)]
+        common: Flags,
+    },
+    /// A log in Locus's CSV format (docs/log-format.md; `.xz` read
+    /// directly).
+    Csv {
+        /// The log file.
+        file: PathBuf,
+        #[command(flatten)]
+        common: Flags,
+    },
+    /// A log in libRSF's text format (e.g.
+    /// `../shared/data/indoor_uwb/Indoor_UWB_Input.txt`): UWB ranges to
+    /// beacons (range-only sightings), differential-drive odometry. The
+    /// ranges' declared variance is not used as the noise.
+    Librsf {
+        /// The input file (`range2`, `odom2diff` lines).
+        input: PathBuf,
+        /// The ground truth (`point2` lines, positions only). Default: the
+        /// input's name with `_Input` replaced by `_GT`, if that file exists.
+        #[arg(long)]
+        truth: Option<PathBuf>,
+        /// Also write the log in Locus's CSV format to this file
+        /// (docs/log-format.md).
+        #[arg(long)]
+        export: Option<PathBuf>,
+        #[command(flatten)]
+        common: Flags,
+    },
+}
+
+/// The replay's options, the same for every source.
+#[derive(ClapArgs, Debug)]
+pub struct Flags {
+    /// Output directory (created if missing). Default:
+    /// `out/replay-<log name>`.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Chi-square gate confidence in (0, 1).
+    #[arg(long, default_value_t = Config::default().gate.unwrap_or(0.99), value_parser = super::positive_f64)]
+    pub gate: f64,
+    /// No gate: apply every sighting.
+    #[arg(long)]
+    pub no_gate: bool,
+    /// Power spectral density of the forward-speed noise, m^2/s.
+    /// Default: the log's `noise` record, else estimated from the log.
+    #[arg(long, value_parser = super::positive_f64)]
+    pub q_v: Option<f64>,
+    /// Power spectral density of the turn-rate noise, rad^2/s.
+    /// Default: the log's `noise` record, else estimated from the log.
+    #[arg(long, value_parser = super::positive_f64)]
+    pub q_omega: Option<f64>,
+    /// Range noise standard deviation, m.
+    /// Default: the log's `noise` record, else estimated from the log.
+    #[arg(long, value_parser = super::positive_f64)]
+    pub sigma_range: Option<f64>,
+    /// Bearing noise standard deviation, rad.
+    /// Default: the log's `noise` record, else estimated from the log.
+    #[arg(long, value_parser = super::positive_f64)]
+    pub sigma_bearing: Option<f64>,
+    /// Initial value of the forward-speed scale factor (a state the filter
+    /// estimates: the logged speed times it is the robot's).
+    #[arg(long, default_value_t = 1.0, value_parser = super::positive_f64)]
+    pub v_scale: f64,
+    /// Initial value of the turn-rate scale factor (estimated, as
+    /// `--v-scale`).
+    #[arg(long, default_value_t = 1.0, value_parser = super::positive_f64)]
+    pub omega_scale: f64,
+    /// Student-t degrees of freedom of the sightings' noise: sightings far
+    /// from the prediction are down-weighted rather than only gated.
+    #[arg(long, default_value_t = 4.0, value_parser = super::positive_f64)]
+    pub robust_dof: f64,
+    /// Gaussian sightings: no Student-t weighting (the gate alone).
+    #[arg(long)]
+    pub no_robust: bool,
+    /// How long after an odometry record the robot moves as it says, s.
+    /// Default: estimated from the log (the delay of smallest innovation likelihood
+    /// on a grid from 0 to 0.4 s).
+    #[arg(long, value_parser = super::finite_f64)]
+    pub odometry_delay: Option<f64>,
+    /// Estimate only the odometry delay from the log: the noise from the
+    /// flags, the log's noise records and the built-in values (MRCLAM's:
+    /// q_v 0.002 m^2/s, q_omega 0.002 rad^2/s, range 1 m, bearing
+    /// 0.01 rad), the biases held at 0. By default every noise level the
+    /// flags and the log's records leave open is estimated from the log
+    /// itself (no ground truth), and the turn-rate and bearing biases are
+    /// estimated where the whole log tells them, else held at 0 and
+    /// reported as held (docs/replay.md).
+    #[arg(long)]
+    pub delay_only: bool,
+    /// Estimate nothing: the flags, the log's noise records and the
+    /// built-in values as they are (odometry delay 0 unless given, biases
+    /// held at 0).
+    #[arg(long, conflicts_with = "delay_only")]
+    pub no_estimate: bool,
+    /// Also run the Rauch-Tung-Striebel smoother over the whole log: its
+    /// accuracy, 3-sigma shares and NEES beside the filter's (table and
+    /// metrics.json), and the smoothed trajectory in smoothed.csv.
+    #[arg(long)]
+    pub smooth: bool,
+    /// Find the initial pose from the first sightings (the landmarks seen
+    /// in the first seconds, carried back by dead reckoning and fitted to
+    /// the map; later windows if those fix none), even when the log has a
+    /// start pose or ground truth. A log with neither always starts this
+    /// way. A pose that fewer than half of a window's sightings support,
+    /// or whose landmarks fix no heading, is refused.
+    #[arg(long)]
+    pub start_from_sightings: bool,
+    /// Top speed of the robot, m/s: an odometry record whose speed is
+    /// above it is refused as implausible (counted, listed with its line;
+    /// the velocities before it held). The same rule as the robot link's
+    /// (docs/log-format.md, "Plausibility").
+    #[arg(long, default_value_t = Limits::GENERIC.max_speed, value_parser = super::positive_f64)]
+    pub max_speed: f64,
+    /// Top turn rate of the robot, rad/s (as --max-speed).
+    #[arg(long, default_value_t = Limits::GENERIC.max_turn_rate, value_parser = super::positive_f64)]
+    pub max_turn_rate: f64,
+    /// Longest time between two odometry records, s: a record later than
+    /// this after the one before it is refused (as --max-speed).
+    #[arg(long, default_value_t = Limits::GENERIC.max_odometry_gap, value_parser = super::positive_f64)]
+    pub max_odometry_gap: f64,
+    /// Pictures.
+    #[command(flatten)]
+    pub pictures: PictureArgs,
+}
+
+impl Flags {
+    /// The replay's settings other than the noise and the odometry delay
+    /// (settled by `locus_replay::policy`).
+    pub fn config(&self) -> Config {
+        Config {
+            gate: (!self.no_gate).then_some(self.gate),
+            robust_dof: (!self.no_robust).then_some(self.robust_dof),
+            smooth: self.smooth,
+            start: if self.start_from_sightings {
+                Start::Sightings
+            } else {
+                Start::Log
+            },
+            calibration: locus_replay::Calibration {
+                initial: [self.v_scale, self.omega_scale, 0.0, 0.0],
+                ..locus_replay::Calibration::default()
+            },
+            limits: Limits {
+                max_speed: self.max_speed,
+                max_turn_rate: self.max_turn_rate,
+                max_odometry_gap: self.max_odometry_gap,
+                ..Limits::GENERIC
+            },
+            ..Config::default()
+        }
+    }
+
+    /// What the flags settle of the noise and the odometry delay, and what
+    /// they leave for `locus_replay::policy` to estimate.
+    pub fn overrides(&self) -> Overrides {
+        Overrides {
+            noise: locus_replay::log::NoiseRecords {
+                q_v: self.q_v,
+                q_omega: self.q_omega,
+                sigma_range: self.sigma_range,
+                sigma_bearing: self.sigma_bearing,
+            },
+            odometry_delay: self.odometry_delay,
+            estimation: if self.no_estimate {
+                Estimation::Nothing
+            } else if self.delay_only {
+                Estimation::Delay
+            } else {
+                Estimation::Noise
+            },
+        }
+    }
+}
+
+/// The replay's settings other than the noise and the odometry delay for
+/// `locus replay csv FILE` with no flags (the flags' defaults, parsed as
+/// the command parses them), for benchmarks that must replay as the
+/// command does (`locus family`).
+pub fn default_config() -> Config {
+    #[derive(clap::Parser)]
+    struct NoFlags {
+        #[command(flatten)]
+        common: Flags,
+    }
+    <NoFlags as clap::Parser>::parse_from(["replay"])
+        .common
+        .config()
+}
