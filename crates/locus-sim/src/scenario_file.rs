@@ -91,6 +91,23 @@ impl Scenario {
         }
     }
 
+    /// What the scenario is, in one line (for `--help`).
+    #[must_use]
+    pub const fn summary(self) -> &'static str {
+        match self {
+            Self::Square => {
+                "paper 001's differential-drive robot, two IR sensors, square arena; \
+                 realistic noise (encoder quantisation, scale error, slip)"
+            }
+            Self::SquareIdeal => "the same loop with noise exactly as the filter's Q and R assume",
+            Self::Wall45 => "paper 000's skid-steer robot, laser at the 45-degree wall",
+            Self::TricycleSlip => {
+                "paper 004's tricycle with wheel slip: rear-only against slip-rejecting odometry"
+            }
+            Self::Hover => "paper 002's body hovering before the camera (6-DOF pose from marks)",
+        }
+    }
+
     /// The scenario's configuration.
     #[must_use]
     pub fn config(self) -> ScenarioConfig {

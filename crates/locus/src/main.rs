@@ -43,9 +43,9 @@ enum Command {
     /// with odometry alone: one leg, open loop, in a few lines of the library
     /// API (`locus run` is the full closed loop).
     Demo(demo::DemoArgs),
-    /// Run a closed-loop scenario of the simulator (square, square-ideal,
-    /// wall45, tricycle-slip, hover: robot, sensors, filter against
-    /// odometry alone), built-in or from a TOML scenario file: prints a summary table and writes `log.csv` (as the run goes),
+    /// Run a closed-loop scenario of the simulator (robot, sensors, filter
+    /// against odometry alone), built-in (listed in `locus run --help`) or
+    /// from a TOML scenario file: prints a summary table and writes `log.csv` (as the run goes),
     /// `metrics.json` and pictures (map, errors, covariance as PNG and SVG);
     /// with `--runs N`, a Monte Carlo over N seeds in parallel (table,
     /// `runs.csv`, `metrics.json`, no step log).

@@ -189,7 +189,7 @@ impl TypedValueParser for ScenarioParser {
         Some(Box::new(
             Scenario::ALL
                 .into_iter()
-                .map(|s| PossibleValue::new(s.name())),
+                .map(|s| PossibleValue::new(s.name()).help(s.summary())),
         ))
     }
 }

@@ -43,11 +43,9 @@ const FLUSH_EVERY: usize = 100;
 /// Arguments of `locus run`.
 #[derive(Args, Debug)]
 pub struct RunArgs {
-    /// Scenario to run: a built-in name, `square` (paper 001's arena with
-    /// realistic noise: encoder quantisation, scale error, slip) or
-    /// `square-ideal` (noise exactly as the filter's Q and R assume), or a
-    /// scenario file `FILE.toml` whose `scenario = "square"` picks the kind
-    /// and whose other keys override its defaults (see `--print-config`).
+    /// Scenario to run: a built-in name (listed below), or a scenario
+    /// file `FILE.toml` whose `scenario = "square"` picks the kind and
+    /// whose other keys override its defaults (see `--print-config`).
     #[arg(default_value = "square", value_name = "SCENARIO|FILE", value_parser = crate::args::ScenarioParser)]
     scenario: ScenarioArg,
     /// Print the scenario's complete configuration as a TOML scenario file
