@@ -4,7 +4,7 @@
 use locus_core::wrap_angle;
 
 use crate::robot::Pose;
-use locus_eval::{Record, Sample};
+use locus_eval::{Record, Sample, columns};
 
 /// What one step of the closed loop produced (SI units, world frame).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -45,32 +45,23 @@ pub struct StepRecord {
 impl StepRecord {
     /// Column names of [`StepRecord::csv_row`], each ending in its unit
     /// (`_s`, `_m`, `_rad`, `_m2`, `_rad2`; none for a count or a ratio).
-    pub const CSV_COLUMNS: [&'static str; 24] = [
-        "step",
-        "time_s",
-        "true_x_m",
-        "true_y_m",
-        "true_theta_rad",
-        "ekf_x_m",
-        "ekf_y_m",
-        "ekf_theta_rad",
-        "var_x_m2",
-        "var_y_m2",
-        "var_theta_rad2",
-        "cov_xy_m2",
-        "odo_x_m",
-        "odo_y_m",
-        "odo_theta_rad",
-        "ir_s1_m",
-        "ir_s2_m",
-        "innov_pos_m",
-        "innov_theta_rad",
-        "nis",
-        "applied",
-        "nees",
-        "gain_pos",
-        "gain_theta",
-    ];
+    pub const CSV_COLUMNS: [&'static str; 24] = columns::header(
+        &["step", "time_s"],
+        &[
+            "odo_x_m",
+            "odo_y_m",
+            "odo_theta_rad",
+            "ir_s1_m",
+            "ir_s2_m",
+            "innov_pos_m",
+            "innov_theta_rad",
+            "nis",
+            "applied",
+            "nees",
+            "gain_pos",
+            "gain_theta",
+        ],
+    );
 }
 
 impl Record for StepRecord {
@@ -81,24 +72,11 @@ impl Record for StepRecord {
 
     /// The record as one CSV line (no newline); absent values are empty.
     fn csv_row(&self) -> String {
-        fn opt(v: Option<f64>) -> String {
-            v.map_or_else(String::new, |v| format!("{v:.9}"))
-        }
-        let f = |v: f64| format!("{v:.9}");
+        let (f, opt) = (columns::fixed, columns::optional);
         let (s1, s2) = self.ir.unzip();
-        let fields = [
-            self.step.to_string(),
-            format!("{:.2}", self.time),
-            f(self.truth.x),
-            f(self.truth.y),
-            f(self.truth.theta),
-            f(self.ekf[0]),
-            f(self.ekf[1]),
-            f(self.ekf[2]),
-            format!("{:.6e}", self.ekf_cov[0][0]),
-            format!("{:.6e}", self.ekf_cov[1][1]),
-            format!("{:.6e}", self.ekf_cov[2][2]),
-            format!("{:.6e}", self.ekf_cov[0][1]),
+        let t = &self.truth;
+        let pose = columns::pose_fields([t.x, t.y, t.theta], self.ekf, &self.ekf_cov);
+        let rest = [
             f(self.odometry[0]),
             f(self.odometry[1]),
             f(self.odometry[2]),
@@ -112,7 +90,12 @@ impl Record for StepRecord {
             opt(self.gain.map(|g| g[0])),
             opt(self.gain.map(|g| g[1])),
         ];
-        fields.join(",")
+        [self.step.to_string(), format!("{:.2}", self.time)]
+            .into_iter()
+            .chain(pose)
+            .chain(rest)
+            .collect::<Vec<_>>()
+            .join(",")
     }
 
     fn sample(&self) -> Sample {

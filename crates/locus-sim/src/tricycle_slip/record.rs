@@ -2,7 +2,7 @@
 //! row.
 
 use locus_core::wrap_angle;
-use locus_eval::{Record, Sample};
+use locus_eval::{Record, Sample, columns};
 use locus_odometry::redundant::Reading;
 
 /// One step of `tricycle-slip` (SI units, world frame).
@@ -47,54 +47,34 @@ impl TricycleSlipRecord {
 
 impl Record for TricycleSlipRecord {
     fn csv_header() -> String {
-        [
-            "step",
-            "time_s",
-            "true_x_m",
-            "true_y_m",
-            "true_theta_rad",
-            "ekf_x_m",
-            "ekf_y_m",
-            "ekf_theta_rad",
-            "var_x_m2",
-            "var_y_m2",
-            "var_theta_rad2",
-            "cov_xy_m2",
-            "rear_odo_x_m",
-            "rear_odo_y_m",
-            "rear_odo_theta_rad",
-            "slip_rej_odo_x_m",
-            "slip_rej_odo_y_m",
-            "slip_rej_odo_theta_rad",
-            "n_l",
-            "n_r",
-            "n_f",
-            "n_s",
-            "range_0_m",
-            "range_1_m",
-            "range_2_m",
-            "nees",
-        ]
-        .join(",")
+        const COLUMNS: [&str; 26] = columns::header(
+            &["step", "time_s"],
+            &[
+                "rear_odo_x_m",
+                "rear_odo_y_m",
+                "rear_odo_theta_rad",
+                "slip_rej_odo_x_m",
+                "slip_rej_odo_y_m",
+                "slip_rej_odo_theta_rad",
+                "n_l",
+                "n_r",
+                "n_f",
+                "n_s",
+                "range_0_m",
+                "range_1_m",
+                "range_2_m",
+                "nees",
+            ],
+        );
+        COLUMNS.join(",")
     }
 
     fn csv_row(&self) -> String {
         let s = &self.sample;
-        let f = |v: f64| format!("{v:.9}");
-        let opt = |v: Option<f64>| v.map_or_else(String::new, |v| format!("{v:.9}"));
-        [
-            s.step.to_string(),
-            format!("{:.2}", s.time),
-            f(s.truth[0]),
-            f(s.truth[1]),
-            f(s.truth_heading),
-            f(s.estimate[0]),
-            f(s.estimate[1]),
-            f(s.estimate_heading),
-            format!("{:.6e}", s.covariance[0][0]),
-            format!("{:.6e}", s.covariance[1][1]),
-            format!("{:.6e}", s.covariance[2][2]),
-            format!("{:.6e}", s.covariance[0][1]),
+        let (f, opt) = (columns::fixed, columns::optional);
+        let truth = [s.truth[0], s.truth[1], s.truth_heading];
+        let estimate = [s.estimate[0], s.estimate[1], s.estimate_heading];
+        let rest = [
             f(self.rear_only[0]),
             f(self.rear_only[1]),
             f(self.rear_only[2]),
@@ -109,8 +89,13 @@ impl Record for TricycleSlipRecord {
             opt(self.ranges[1]),
             opt(self.ranges[2]),
             format!("{:.6}", s.nees),
-        ]
-        .join(",")
+        ];
+        [s.step.to_string(), format!("{:.2}", s.time)]
+            .into_iter()
+            .chain(columns::pose_fields(truth, estimate, &s.covariance))
+            .chain(rest)
+            .collect::<Vec<_>>()
+            .join(",")
     }
 
     fn sample(&self) -> Sample {

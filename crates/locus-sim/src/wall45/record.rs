@@ -2,7 +2,7 @@
 
 use locus_core::Belief;
 use locus_core::nalgebra::{Matrix2, Matrix2x3, Vector2};
-use locus_eval::{Record, Sample};
+use locus_eval::{Record, Sample, columns};
 
 /// What one correction with the paper's laser model (m = 2) was given: the
 /// prior and the quantities the papers' Nios II computed in software for
@@ -43,75 +43,58 @@ pub struct Wall45Record {
     pub laser: Option<LaserCorrection>,
 }
 
-fn fmt_opt(v: Option<f64>) -> String {
-    v.map_or_else(String::new, |v| format!("{v:.9}"))
-}
-
 impl Record for Wall45Record {
     fn csv_header() -> String {
-        [
-            "step",
-            "time_s",
-            "instant",
-            "moving",
-            "true_x_m",
-            "true_y_m",
-            "true_theta_rad",
-            "ekf_x_m",
-            "ekf_y_m",
-            "ekf_theta_rad",
-            "var_x_m2",
-            "var_y_m2",
-            "var_theta_rad2",
-            "cov_xy_m2",
-            "odo_x_m",
-            "odo_y_m",
-            "odo_theta_err_rad",
-            "v_l_m_per_s",
-            "v_r_m_per_s",
-            "range_m",
-            "innovation_m",
-            "nis",
-            "applied",
-            "nees",
-        ]
-        .join(",")
+        const COLUMNS: [&str; 24] = columns::header(
+            &["step", "time_s", "instant", "moving"],
+            &[
+                "odo_x_m",
+                "odo_y_m",
+                "odo_theta_err_rad",
+                "v_l_m_per_s",
+                "v_r_m_per_s",
+                "range_m",
+                "innovation_m",
+                "nis",
+                "applied",
+                "nees",
+            ],
+        );
+        COLUMNS.join(",")
     }
 
     fn csv_row(&self) -> String {
         let s = &self.sample;
-        let f = |v: f64| format!("{v:.9}");
+        let (f, opt) = (columns::fixed, columns::optional);
         let (odo, odo_th) = s.odometry.unwrap_or(([f64::NAN; 3], f64::NAN));
         let (nis, applied) = s.correction.map_or((None, String::new()), |(n, _, a)| {
             (Some(n), u8::from(a).to_string())
         });
-        [
+        let lead = [
             s.step.to_string(),
             format!("{:.2}", s.time),
             self.instant.map_or_else(String::new, |i| i.to_string()),
             u8::from(self.moving).to_string(),
-            f(s.truth[0]),
-            f(s.truth[1]),
-            f(s.truth_heading),
-            f(s.estimate[0]),
-            f(s.estimate[1]),
-            f(s.estimate_heading),
-            format!("{:.6e}", s.covariance[0][0]),
-            format!("{:.6e}", s.covariance[1][1]),
-            format!("{:.6e}", s.covariance[2][2]),
-            format!("{:.6e}", s.covariance[0][1]),
+        ];
+        let truth = [s.truth[0], s.truth[1], s.truth_heading];
+        let estimate = [s.estimate[0], s.estimate[1], s.estimate_heading];
+        let rest = [
             f(odo[0]),
             f(odo[1]),
             f(odo_th),
             f(self.tread_speeds[0]),
             f(self.tread_speeds[1]),
-            fmt_opt(self.range),
-            fmt_opt(self.innovation),
-            fmt_opt(nis),
+            opt(self.range),
+            opt(self.innovation),
+            opt(nis),
             applied,
             format!("{:.6}", s.nees),
-        ]
-        .join(",")
+        ];
+        lead.into_iter()
+            .chain(columns::pose_fields(truth, estimate, &s.covariance))
+            .chain(rest)
+            .collect::<Vec<_>>()
+            .join(",")
     }
 
     fn sample(&self) -> Sample {
