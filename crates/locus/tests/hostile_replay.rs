@@ -5,58 +5,17 @@
 
 use core::fmt::Write as _;
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
+
+mod common;
+use common::{arc_log as log, scratch};
 
 fn locus(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_locus"))
         .args(args)
         .output()
         .expect("run locus")
-}
-
-/// A fresh temporary directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("locus-hostile-{name}-{}", std::process::id()));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
-
-/// A robot driving a circular arc (0.2 m/s, 0.1 rad/s) for 10 s at 50 Hz,
-/// with exact sightings of three landmarks every 0.5 s (57 in all) and,
-/// with `truth`, the exact ground truth. `extra` is inserted after the
-/// 13th measurement line; returns the text and the line number `extra`
-/// starts on (1-based).
-fn log(truth: bool, extra: &str) -> (String, usize) {
-    let mut s = String::from("landmark,1,3,0\nlandmark,2,0,3\nlandmark,3,-2,-2\nstart,0,0,0,0\n");
-    let (v, w) = (0.2, 0.1);
-    let pose = |t: f64| (v / w * (w * t).sin(), v / w * (1.0 - (w * t).cos()), w * t);
-    for i in 0..=500 {
-        let t = f64::from(i) * 0.02;
-        writeln!(s, "odometry,{t},{v},{w}").unwrap();
-        if truth {
-            let (x, y, th) = pose(t);
-            writeln!(s, "truth,{t},{x},{y},{th}").unwrap();
-        }
-    }
-    let mut extra_line = 0;
-    let mut n = 0;
-    for k in 1..20 {
-        let t = f64::from(k) * 0.5;
-        let (x, y, th) = pose(t);
-        for (id, lx, ly) in [(1, 3.0, 0.0), (2, 0.0, 3.0), (3, -2.0_f64, -2.0_f64)] {
-            let r = (lx - x).hypot(ly - y);
-            let b = (ly - y).atan2(lx - x) - th;
-            writeln!(s, "measurement,{t},{id},{r},{b}").unwrap();
-            n += 1;
-            if n == 13 {
-                extra_line = s.lines().count() + 1;
-                s.push_str(extra);
-            }
-        }
-    }
-    (s, extra_line)
 }
 
 /// Replays `text` (written to `dir/name`) with `flags`; returns the output

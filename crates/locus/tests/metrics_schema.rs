@@ -5,10 +5,13 @@
 //! (`tests/fixtures/metrics-v1-*.json`) do not validate.
 
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use serde_json::Value;
+
+mod common;
+use common::{arc_log, scratch};
 
 /// `docs/metrics.schema.json`, compiled.
 fn validator() -> jsonschema::Validator {
@@ -30,13 +33,6 @@ fn errors(validator: &jsonschema::Validator, metrics: &Value) -> Vec<String> {
         .iter_errors(metrics)
         .map(|e| format!("{}: {e}", e.instance_path()))
         .collect()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("locus-schema-{name}-{}", std::process::id()));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).expect("temp dir");
-    dir
 }
 
 /// Runs `locus` with `args` and `--out out --no-plots`, and reads the
@@ -80,34 +76,6 @@ fn simulator_keys(v: &Value) -> Vec<String> {
         .collect()
 }
 
-/// A robot on a circular arc (0.2 m/s, 0.1 rad/s) for 10 s, exact
-/// sightings of three landmarks every 0.5 s and, with `truth`, the exact
-/// ground truth, in Locus CSV.
-fn small_log(truth: bool) -> String {
-    use core::fmt::Write as _;
-    let mut s = String::from("landmark,1,3,0\nlandmark,2,0,3\nlandmark,3,-2,-2\nstart,0,0,0,0\n");
-    let (v, w) = (0.2, 0.1);
-    let pose = |t: f64| (v / w * (w * t).sin(), v / w * (1.0 - (w * t).cos()), w * t);
-    for i in 0..=500 {
-        let t = f64::from(i) * 0.02;
-        writeln!(s, "odometry,{t},{v},{w}").unwrap();
-        if truth {
-            let (x, y, th) = pose(t);
-            writeln!(s, "truth,{t},{x},{y},{th}").unwrap();
-        }
-    }
-    for k in 1..20 {
-        let t = f64::from(k) * 0.5;
-        let (x, y, th) = pose(t);
-        for (id, lx, ly) in [(1, 3.0, 0.0), (2, 0.0, 3.0), (3, -2.0_f64, -2.0_f64)] {
-            let r = (lx - x).hypot(ly - y);
-            let b = (ly - y).atan2(lx - x) - th;
-            writeln!(s, "measurement,{t},{id},{r},{b}").unwrap();
-        }
-    }
-    s
-}
-
 #[test]
 fn every_source_writes_metrics_that_validate_against_the_schema() {
     let validator = validator();
@@ -130,7 +98,7 @@ fn every_source_writes_metrics_that_validate_against_the_schema() {
 
     for (name, truth) in [("with-truth", true), ("no-truth", false)] {
         let log = dir.join(format!("{name}.csv"));
-        fs::write(&log, small_log(truth)).unwrap();
+        fs::write(&log, arc_log(truth, "").0).unwrap();
         let out = dir.join(format!("replay-{name}"));
         files.push((
             format!("replay {name}"),
