@@ -97,15 +97,14 @@ pub struct Calibration {
 
 impl Default for Calibration {
     /// Uncalibrated logs: both scale factors estimated from 1 +- 0.2
-    /// (commanded velocities 10 % off lie well inside), drifting by about
-    /// 0.1 % per sqrt(s). The two biases are held at 0 (standard deviation
-    /// 1e-6, no drift): on MRCLAM dataset 6, estimating them too (from
-    /// 0 +- 0.05 rad/s and 0 +- 0.05 rad) made the filter's heading worse on
-    /// every robot (RMSE 0.14-0.18 rad against 0.12-0.15) and let 5 %
-    /// corrupted sightings nearly double robot 4's position error, because
-    /// a bad sighting that gets through moves a bias for good. Give them a
-    /// wider `std` (and a `walk`) for a robot whose turn rate or bearings
-    /// are known to be biased.
+    /// (commanded velocities 10 % off lie well inside), with a random walk
+    /// of 1e-6 /s each (about 0.1 % per sqrt(s)). The two biases are held
+    /// at 0: standard deviation 1e-6 (rad/s, rad), no random walk, so the
+    /// gate's recovery leaves them as they are and a bad sighting that gets
+    /// through cannot move them for good. Give them a wider `std` (and a
+    /// `walk`) for a robot whose turn rate or bearings are known to be
+    /// biased. Why the biases are held by default: docs/replay.md,
+    /// "Calibration states".
     fn default() -> Self {
         Self {
             initial: [1.0, 1.0, 0.0, 0.0],
@@ -122,21 +121,16 @@ impl Default for Config {
     /// 99 % gate, inflation by 4 after 5 consecutive rejections; the
     /// calibration states of [`Calibration::default`]; a 1 s history.
     ///
-    /// The range noise is deliberately wide. The camera's ranges on
-    /// MRCLAM dataset 6 have a small spread from one frame to the next
-    /// (median absolute deviation 0.05 to 0.12 m against the ground truth)
-    /// but errors that persist for seconds per landmark (on robot 3,
-    /// landmark 13 reads 0.42 m short for the whole of 612-624 s while
-    /// landmarks 6-8 read 0.1 m long), so a filter that takes them as
-    /// independent at their frame-to-frame spread is over-confident. The
-    /// bearings are tight and independent (0.004-0.007 rad).
-    ///
-    /// The process noise is what [`crate::drift::process_noise`] finds
-    /// from the sightings alone (how fast dead reckoning drifts between
-    /// pose fixes), as the median over robots 1-3 of MRCLAM dataset 6
-    /// (`q_v` 0.0018, 0.0053, 0.0019 m^2/s; `q_omega` 0.0017, 0.0019,
-    /// 0.0003 rad^2/s), to one significant digit. See docs/replay.md for
-    /// the measurements.
+    /// The range noise is deliberately wide, far above a camera's
+    /// frame-to-frame spread: it stands for range errors that persist for
+    /// seconds per landmark, which a filter taking each range as
+    /// independent at that spread would be over-confident about; the
+    /// bearings, tight and independent, then carry the position. The
+    /// process noise is what [`crate::drift::process_noise`] finds from the
+    /// sightings alone (how fast dead reckoning drifts between pose fixes)
+    /// on MRCLAM dataset 6, to one significant digit. The measurements
+    /// behind both: docs/replay.md, "Why these noise levels" and "Where
+    /// the process noise comes from".
     fn default() -> Self {
         Self {
             q_v: 0.002,

@@ -5,9 +5,9 @@
 
 use core::fmt;
 
-use crate::Sighting;
 use crate::log::{RefusedRecord, RefusedTime};
 use crate::step::Unusable;
+use crate::{Config, Log, Sighting};
 
 /// Refused records a [`Refusals`] keeps described.
 pub const KEPT: usize = 20;
@@ -130,6 +130,20 @@ impl Refusals {
     pub fn total(&self) -> usize {
         self.total
     }
+}
+
+/// The records refused before the replay: implausible noise records,
+/// implausible odometry records, sightings with implausible time stamps.
+pub(crate) fn refusals_before(log: &Log, cfg: &Config) -> Refusals {
+    let mut r = Refusals::default();
+    let records = log.refused_noise.iter().copied();
+    for record in records.chain(log.refused_odometry(&cfg.limits)) {
+        r.push(Refusal::Record(record));
+    }
+    for time in &log.refused_times {
+        r.push(Refusal::Time(*time));
+    }
+    r
 }
 
 #[cfg(test)]

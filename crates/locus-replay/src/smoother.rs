@@ -22,10 +22,9 @@ use locus_models::unicycle::Velocities;
 
 use locus_eval::Tally;
 
-use crate::{
-    Checkpoint, Engine, Error, STATE, StateMatrix, StateVector, Step, calibration_of, judged,
-    pose_belief,
-};
+use crate::engine::{Checkpoint, Engine, judged};
+use crate::filter::{calibration_of, pose_belief};
+use crate::{Error, STATE, StateMatrix, StateVector, Step};
 
 /// What the backward pass needs of one event of the forward pass: the
 /// prediction from one event to the next is recomputed from these, with the

@@ -1,0 +1,225 @@
+//! The replay's filter and how one event is applied to it.
+//!
+//! The state ([`STATE`] = 7) is the pose `x`, `y` (m), `theta` (rad) and
+//! the calibration of
+//! [`CalibratedUnicycle`](locus_models::calibrated_unicycle::CalibratedUnicycle):
+//! speed scale `s_v`, turn-rate scale `s_omega`, turn-rate bias `b_omega`
+//! (rad/s), bearing bias `b_bearing` (rad). The running filter's track
+//! carries beside it the input in force and dead reckoning ([`Carried`]);
+//! its history holds at most [`HISTORY`] events.
+//!
+//! [`apply`] is the running filter's deterministic `apply`: it predicts
+//! the track over the time since its last event with the input then in
+//! force, then takes the event (an odometry record sets the input; a
+//! sighting is one Student-t range-bearing or range-only correction,
+//! refused without changing the track if the filter cannot use it) and
+//! records the sighting's innovation log-likelihood term, its NIS capped
+//! at [`NIS_CAP`] or [`NIS_CAP_RANGE`].
+
+use locus_core::nalgebra::{SMatrix, SVector, Vector2, Vector3};
+use locus_core::{
+    Belief, MeasurementModel, MotionModel, Rules, RunningFilter, StudentT, Track, Update,
+};
+use locus_models::calibrated_range::CalibratedRange;
+use locus_models::calibrated_range_bearing::CalibratedRangeBearing;
+use locus_models::calibrated_unicycle::{BEARING_BIAS, OMEGA_BIAS, OMEGA_SCALE, V_SCALE};
+use locus_models::range_bearing::RangeBearing;
+use locus_models::unicycle::{Unicycle, Velocities};
+
+use crate::event::{Entry, Event};
+use crate::{Config, Log, SightingOutcome, Unusable};
+
+/// Cap on one sighting's NIS in
+/// [`Report::innovation_nll`](crate::Report::innovation_nll): the 99.9 %
+/// point of chi-square with 2 degrees of freedom, `-2 ln 0.001`.
+pub const NIS_CAP: f64 = 13.815_510_557_964_274;
+
+/// Cap on a range-only sighting's NIS in
+/// [`Report::innovation_nll`](crate::Report::innovation_nll): the 99.9 %
+/// point of chi-square with 1 degree of freedom.
+pub const NIS_CAP_RANGE: f64 = 10.827_566_170_662_733;
+
+/// What the replay carries beside the belief: the input in force (scaled)
+/// and dead reckoning from the same start with the same inputs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Carried {
+    pub(crate) v: f64,
+    pub(crate) omega: f64,
+    pub(crate) dead: Vector3<f64>,
+}
+
+/// Dimension of the replay's state: the pose and the calibration of
+/// [`CalibratedUnicycle`](locus_models::calibrated_unicycle::CalibratedUnicycle).
+pub const STATE: usize = 7;
+
+/// The replay's state vector and covariance.
+pub type StateVector = SVector<f64, STATE>;
+/// A covariance of the replay's state.
+pub type StateMatrix = SMatrix<f64, STATE, STATE>;
+
+/// Events the history holds at most. The history is cut by time
+/// ([`Config::horizon`]); this bound only matters for a log with more than
+/// this many events within one horizon, whose oldest events then become
+/// final early.
+pub(crate) const HISTORY: usize = 1024;
+
+pub(crate) type Filter = RunningFilter<f64, STATE, HISTORY, Entry, Carried>;
+pub(crate) type State = Track<f64, STATE, Carried>;
+
+/// Advances `track` to `entry`'s time and applies it (the running filter's
+/// `apply`; deterministic, as a re-run needs).
+pub(crate) fn apply(
+    cfg: &Config,
+    log: &Log,
+    rules: &Rules<f64>,
+    track: &mut State,
+    entry: &mut Entry,
+) -> Result<(), locus_core::Error> {
+    let t = entry.event.time();
+    let dt = t - track.time;
+    if dt > 0.0 {
+        let model = cfg.motion_model();
+        let c = track.extra;
+        let u = Velocities {
+            v: c.v,
+            omega: c.omega,
+            dt,
+        };
+        track.predict(&rules.ekf, &model, &u)?;
+        track.extra.dead = Unicycle::new(0.0, 0.0).f(&c.dead, &u, &Vector2::zeros());
+        track.time = t;
+    }
+    entry.inflations = 0;
+    entry.nll = 0.0;
+    entry.outcome = match entry.event {
+        Event::Odometry(o, _) => {
+            track.extra.v = o.v;
+            track.extra.omega = o.omega;
+            None
+        }
+        Event::Sighting(z, _) => Some(match log.landmark(z.landmark) {
+            None => SightingOutcome::NotInMap,
+            // Also NaN, should a log ever hold one.
+            Some(_) if z.range.is_nan() || z.range > cfg.max_range => {
+                SightingOutcome::Unusable(Unusable::RangeAbove { max: cfg.max_range })
+            }
+            Some(l) => {
+                let inner = RangeBearing::new(
+                    Vector2::new(l.x, l.y),
+                    Vector2::new(log.sensor.x, log.sensor.y),
+                    cfg.sigma_range,
+                    cfg.sigma_bearing,
+                );
+                let outcome = match z.bearing {
+                    Some(bearing) => correct(
+                        cfg,
+                        rules,
+                        track,
+                        entry,
+                        &CalibratedRangeBearing {
+                            inner,
+                            yaw: log.sensor.yaw,
+                        },
+                        &Vector2::new(z.range, bearing),
+                        NIS_CAP,
+                        SMatrix::determinant,
+                    ),
+                    None => correct(
+                        cfg,
+                        rules,
+                        track,
+                        entry,
+                        &CalibratedRange { inner },
+                        &SVector::<f64, 1>::new(z.range),
+                        NIS_CAP_RANGE,
+                        |s| s[(0, 0)],
+                    ),
+                };
+                match outcome? {
+                    Some(o) => o,
+                    // Refused: the track is unchanged.
+                    None => return Ok(()),
+                }
+            }
+        }),
+    };
+    Ok(())
+}
+
+/// Corrects `track` with one sighting `z` of `M` components (range and
+/// bearing, or range alone) by `model`, Student-t weighted as `cfg` says,
+/// and records its innovation log-likelihood term (its NIS capped at
+/// `nis_cap`; `determinant` of the innovation covariance) in `entry`. `Ok(None)`: the correction failed on the
+/// sighting, which is refused (`entry`'s outcome set, the track unchanged).
+fn correct<const M: usize>(
+    cfg: &Config,
+    rules: &Rules<f64>,
+    track: &mut State,
+    entry: &mut Entry,
+    model: &impl MeasurementModel<f64, STATE, M>,
+    z: &SVector<f64, M>,
+    nis_cap: f64,
+    determinant: fn(&SMatrix<f64, M, M>) -> f64,
+) -> Result<Option<SightingOutcome>, locus_core::Error> {
+    let update = match cfg.robust_dof.map(StudentT::new) {
+        Some(Ok(t)) => track.correct_robust(rules, &t, model, z),
+        _ => track.correct(rules, model, z),
+    };
+    // A correction that fails on the sighting (not on the belief) refuses
+    // it; the track is then unchanged.
+    let update = match update {
+        Ok(u) => u,
+        Err(e) => match Unusable::of(e) {
+            Some(why) => {
+                entry.outcome = Some(SightingOutcome::Unusable(why));
+                return Ok(None);
+            }
+            None => return Err(e),
+        },
+    };
+    if let Some(first) = update.first_attempt() {
+        entry.nll = 0.5 * determinant(&first.s).ln() + 0.5 * first.nis.min(nis_cap);
+    }
+    entry.inflations = u32::from(update.inflated());
+    Ok(Some(match update {
+        Update::Applied {
+            correction,
+            first,
+            weight,
+        } => SightingOutcome::Applied {
+            nis: correction.nis,
+            recovered: first.is_some(),
+            weight,
+        },
+        Update::Gated { correction, .. } => SightingOutcome::Gated {
+            nis: correction.nis,
+        },
+        Update::NoMeasurement => SightingOutcome::NoMeasurement,
+    }))
+}
+
+/// The pose part of a belief of the replay's state.
+pub(crate) fn pose_belief(b: &Belief<f64, STATE>) -> Belief<f64, 3> {
+    Belief::new(
+        b.x.fixed_rows::<3>(0).into_owned(),
+        b.p.fixed_view::<3, 3>(0, 0).into_owned(),
+    )
+}
+
+/// The calibration part of a belief: `(mean, standard deviation)` of `s_v`,
+/// `s_omega`, `b_omega` (rad/s) and `b_bearing` (rad).
+pub(crate) fn calibration_of(b: &Belief<f64, STATE>) -> [(f64, f64); 4] {
+    [V_SCALE, OMEGA_SCALE, OMEGA_BIAS, BEARING_BIAS].map(|i| (b.x[i], b.p[(i, i)].sqrt()))
+}
+
+#[cfg(test)]
+mod nis_caps {
+    /// The caps are the 99.9 % points of chi-square with 2 and 1 dof.
+    #[test]
+    fn the_caps_are_the_chi_square_points() {
+        for (cap, dof) in [(super::NIS_CAP, 2), (super::NIS_CAP_RANGE, 1)] {
+            let q = locus_core::chi2::quantile(0.999, dof).unwrap();
+            assert!((cap - q).abs() < 1e-9 * q, "{cap} against {q} ({dof} dof)");
+        }
+    }
+}
