@@ -68,6 +68,7 @@ extern crate alloc;
 mod config;
 mod dead_reckoning;
 pub mod drift;
+pub mod fleet;
 pub mod initial;
 pub mod log;
 pub mod noise;
