@@ -34,6 +34,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, anyhow};
 use clap::Args as ClapArgs;
+use clap::ValueEnum;
 use locus_logs::mrclam::Dataset;
 use locus_replay::fleet::{self, Comparison, Figures, Method, Options, Progress, Role};
 use locus_replay::{Config, Log};
@@ -102,6 +103,12 @@ impl Objective {
             Objective::Truth => Method::Truth,
         }
     }
+
+    /// The name the user types (`--objective estimate`).
+    fn name(self) -> String {
+        self.to_possible_value()
+            .map_or_else(String::new, |v| v.get_name().to_string())
+    }
 }
 
 /// Runs `locus tune`.
@@ -157,8 +164,8 @@ pub fn run(args: &Args) -> Result<()> {
         names.map(String::as_str).collect::<Vec<_>>().join(", ")
     };
     let mut text = format!(
-        "locus tune {source}: objective {:?}, tuned on {} ({how}){}, held out {}\n",
-        args.objective,
+        "locus tune {source}: objective {}, tuned on {} ({how}){}, held out {}\n",
+        args.objective.name(),
         names(&mut tuned.tuned_on.iter()),
         if tuned.left_out.is_empty() {
             String::new()
