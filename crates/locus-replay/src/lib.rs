@@ -79,6 +79,7 @@ mod engine;
 mod error;
 mod event;
 mod filter;
+pub mod fleet;
 pub mod initial;
 pub mod log;
 pub mod noise;

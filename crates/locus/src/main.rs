@@ -83,11 +83,11 @@ enum Command {
     /// at their own time. Prints the summary against ground truth beside
     /// odometry alone, writes `log.csv`, `metrics.json` and pictures.
     Replay(replay::Args),
-    /// Settings for a fleet: the noise and odometry delay estimated on some
-    /// logs (an MRCLAM dataset's robots, or Locus CSV logs), combined by
-    /// their medians, and every log's errors with the built-in and the
-    /// tuned values; by default each estimate is what `locus replay`
-    /// finds from that log with no flags.
+    /// Settings for a fleet: the noise levels and the odometry delay tuned
+    /// on some logs (an MRCLAM dataset's robots, or Locus CSV logs), by
+    /// default the medians of what `locus replay` estimates from each log
+    /// with no flags (--objective for the others), and every log's errors
+    /// against its ground truth with the built-in and the tuned values.
     Tune(tune::Args),
     /// The simulated family of robots (locus_sim::family) as a benchmark
     /// of the replay: each member's log replayed as `locus replay csv FILE`

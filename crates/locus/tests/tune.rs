@@ -86,7 +86,7 @@ fn tune_combines_what_the_replay_estimates_from_each_log() {
     // MRCLAM: robots 1-3 tuned on, each value their median.
     let text = locus(&["tune", data()]);
     assert!(
-        text.contains("objective Estimate") && text.contains("held out"),
+        text.contains("objective estimate,") && text.contains("held out"),
         "{text}"
     );
     for (k, label) in LABELS.iter().enumerate() {

@@ -22,7 +22,6 @@ use locus_replay::policy::{Settled, Source as From, settle};
 use locus_replay::results::Section;
 use locus_replay::{Log, Report, csv_out::replay_to_csv};
 
-pub(crate) use crate::args::replay::default_config;
 use crate::args::replay::{Flags, Source};
 use crate::metrics::{self, Metrics};
 use crate::output::{print_out, progress_bar};
