@@ -92,8 +92,8 @@ fn simulated() -> Log {
 /// 0.01 rad; no delay), while the log was simulated with `q_v` 0.002 m^2/s
 /// and `q_omega` 0.004 rad^2/s, a ratio of 2: the starting ratio is wrong,
 /// and the test asserts that both process noise values are recovered (each
-/// within two of its standard errors), as are the measurement noise (within
-/// 20 %) and the delay (within 0.05 s).
+/// within two of its standard errors, and their ratio nearer 2 than 1), as
+/// are the measurement noise (within 20 %) and the delay (within 0.05 s).
 #[test]
 fn recovers_the_noise_and_delay_a_log_was_simulated_with() {
     let log = simulated();
@@ -138,6 +138,15 @@ fn recovers_the_noise_and_delay_a_log_was_simulated_with() {
             "{name}: {value} +- {se}, truth {truth}"
         );
     }
+    // And the ratio moved from the start's 1 to the log's 2: nearer 2 than
+    // 1 on a log scale (above sqrt 2), which a q_omega left at its start
+    // would not be.
+    let ratio = c.q_omega / c.q_v;
+    assert!(
+        ratio > core::f64::consts::SQRT_2,
+        "q_omega / q_v = {ratio}: still nearer the start's 1 than the log's {}",
+        Q_OMEGA / Q_V
+    );
 }
 
 /// The policy's noise estimate settles the bearing bias from the log: on the
