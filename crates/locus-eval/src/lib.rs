@@ -166,30 +166,30 @@ pub struct Summary {
     pub duration: f64,
     /// Laps of the path completed (scenarios that drive laps; else 0).
     pub laps_completed: usize,
-    /// EKF position RMSE (m).
-    pub ekf_position_rmse: f64,
-    /// EKF heading RMSE (rad, wrapped errors; for `hover` the attitude
+    /// Position RMSE of the estimate (the filter's or the smoother's), m.
+    pub position_rmse: f64,
+    /// Heading RMSE of the estimate (rad, wrapped errors; for `hover` the attitude
     /// angle); NaN if the truth has no heading.
-    pub ekf_heading_rmse: f64,
-    /// Circular mean of the EKF's wrapped heading errors (truth minus
+    pub heading_rmse: f64,
+    /// Circular mean of the estimate's wrapped heading errors (truth minus
     /// estimate), rad in (-pi, pi]: a constant offset between the truth's
     /// heading frame and the robot's (motion capture rarely aligns them);
     /// NaN if the truth has no heading.
-    pub ekf_heading_offset: f64,
-    /// EKF heading RMSE about [`Summary::ekf_heading_offset`]: the RMS of
+    pub heading_offset: f64,
+    /// Heading RMSE about [`Summary::heading_offset`]: the RMS of
     /// the heading errors minus the offset, wrapped, rad; NaN if the truth
     /// has no heading.
-    pub ekf_heading_rmse_about_offset: f64,
+    pub heading_rmse_about_offset: f64,
     /// Share of steps whose heading error minus
-    /// [`Summary::ekf_heading_offset`] lies within 3 standard deviations of
+    /// [`Summary::heading_offset`] lies within 3 standard deviations of
     /// the estimate's own heading variance; NaN without a heading truth.
     pub within_3_sigma_heading_about_offset: f64,
     /// Mean NEES with the heading errors taken about
-    /// [`Summary::ekf_heading_offset`] (`(e - c u)^T P^-1 (e - c u)`, `u`
+    /// [`Summary::heading_offset`] (`(e - c u)^T P^-1 (e - c u)`, `u`
     /// the heading axis); NaN without a heading truth or with mixed dof.
     pub mean_nees_about_offset: f64,
-    /// EKF largest position error (m).
-    pub ekf_max_position_error: f64,
+    /// Largest position error of the estimate (m).
+    pub max_position_error: f64,
     /// Odometry-only position RMSE (m); NaN if the scenario has none.
     pub odometry_position_rmse: f64,
     /// Odometry-only heading RMSE (rad); NaN if the scenario has none or
@@ -236,13 +236,13 @@ impl Summary {
     #[must_use]
     pub fn without_truth_figures(mut self) -> Self {
         for v in [
-            &mut self.ekf_position_rmse,
-            &mut self.ekf_heading_rmse,
-            &mut self.ekf_heading_offset,
-            &mut self.ekf_heading_rmse_about_offset,
+            &mut self.position_rmse,
+            &mut self.heading_rmse,
+            &mut self.heading_offset,
+            &mut self.heading_rmse_about_offset,
             &mut self.within_3_sigma_heading_about_offset,
             &mut self.mean_nees_about_offset,
-            &mut self.ekf_max_position_error,
+            &mut self.max_position_error,
             &mut self.odometry_position_rmse,
             &mut self.odometry_heading_rmse,
             &mut self.odometry_max_position_error,
@@ -476,13 +476,13 @@ impl Tally {
             compared: self.compared,
             duration: self.duration,
             laps_completed,
-            ekf_position_rmse: (self.sq_pos / n).sqrt(),
-            ekf_heading_rmse: (self.sq_heading / heading_n).sqrt(),
-            ekf_heading_offset: offset,
-            ekf_heading_rmse_about_offset: about_offset,
+            position_rmse: (self.sq_pos / n).sqrt(),
+            heading_rmse: (self.sq_heading / heading_n).sqrt(),
+            heading_offset: offset,
+            heading_rmse_about_offset: about_offset,
             within_3_sigma_heading_about_offset: inside_about_offset,
             mean_nees_about_offset: nees_about_offset,
-            ekf_max_position_error: if self.compared > 0 {
+            max_position_error: if self.compared > 0 {
                 self.max_pos
             } else {
                 f64::NAN
@@ -579,12 +579,9 @@ mod tests {
                 ));
             }
             let s = t.summary(0);
-            assert!((s.ekf_heading_offset - offset).abs() < 1e-9, "{s:?}");
-            assert!(
-                (s.ekf_heading_rmse_about_offset - 0.01).abs() < 1e-9,
-                "{s:?}"
-            );
-            assert!((s.ekf_heading_rmse - offset.abs()).abs() < 0.02, "{s:?}");
+            assert!((s.heading_offset - offset).abs() < 1e-9, "{s:?}");
+            assert!((s.heading_rmse_about_offset - 0.01).abs() < 1e-9, "{s:?}");
+            assert!((s.heading_rmse - offset.abs()).abs() < 0.02, "{s:?}");
             // About the offset, the estimate's own errors are honest.
             assert_eq!(s.within_3_sigma[2], 0.0, "{s:?}");
             assert_eq!(s.within_3_sigma_heading_about_offset, 1.0, "{s:?}");
@@ -607,12 +604,12 @@ mod tests {
         let s = t.summary(0);
         assert_eq!(s.nees_dof, 2);
         assert!((s.mean_nees - 1.0).abs() < 1e-12);
-        assert!((s.ekf_position_rmse - 0.1).abs() < 1e-12);
+        assert!((s.position_rmse - 0.1).abs() < 1e-12);
         assert_eq!(s.within_3_sigma[..2], [1.0, 1.0]);
         for v in [
-            s.ekf_heading_rmse,
-            s.ekf_heading_offset,
-            s.ekf_heading_rmse_about_offset,
+            s.heading_rmse,
+            s.heading_offset,
+            s.heading_rmse_about_offset,
             s.odometry_heading_rmse,
             s.within_3_sigma[2],
         ] {
@@ -638,7 +635,7 @@ mod tests {
         assert_eq!((s.readings, s.associated, s.applied), (3, 2, 1));
         assert_eq!(s.acceptance, 0.5);
         assert_eq!(s.duration, 8.0);
-        assert!((s.ekf_position_rmse - 0.1).abs() < 1e-12, "{s:?}");
+        assert!((s.position_rmse - 0.1).abs() < 1e-12, "{s:?}");
         assert_eq!(s.within_3_sigma[..2], [1.0, 1.0]);
     }
 
@@ -648,15 +645,12 @@ mod tests {
     fn an_empty_tally_reports_no_figure_as_zero() {
         let s = Tally::new(3).unwrap().summary(0);
         for (name, v) in [
-            ("ekf_position_rmse", s.ekf_position_rmse),
-            ("ekf_heading_rmse", s.ekf_heading_rmse),
-            ("ekf_heading_offset", s.ekf_heading_offset),
-            (
-                "ekf_heading_rmse_about_offset",
-                s.ekf_heading_rmse_about_offset,
-            ),
+            ("position_rmse", s.position_rmse),
+            ("heading_rmse", s.heading_rmse),
+            ("heading_offset", s.heading_offset),
+            ("heading_rmse_about_offset", s.heading_rmse_about_offset),
             ("within_3_sigma heading", s.within_3_sigma[2]),
-            ("ekf_max_position_error", s.ekf_max_position_error),
+            ("max_position_error", s.max_position_error),
             ("odometry_position_rmse", s.odometry_position_rmse),
             ("mean_nees", s.mean_nees),
             ("nees_in_interval", s.nees_in_interval),

@@ -71,11 +71,11 @@ impl Accuracy {
     pub fn of(s: &Summary) -> Self {
         Self {
             compared: s.compared,
-            position_rmse_m: s.ekf_position_rmse,
-            heading_rmse_rad: s.ekf_heading_rmse,
-            heading_offset_rad: s.ekf_heading_offset,
-            heading_rmse_about_offset_rad: s.ekf_heading_rmse_about_offset,
-            max_position_error_m: s.ekf_max_position_error,
+            position_rmse_m: s.position_rmse,
+            heading_rmse_rad: s.heading_rmse,
+            heading_offset_rad: s.heading_offset,
+            heading_rmse_about_offset_rad: s.heading_rmse_about_offset,
+            max_position_error_m: s.max_position_error,
             mean_nees: s.mean_nees,
             nees_dof: s.nees_dof,
             nees_in_95_interval_share: s.nees_in_interval,

@@ -74,7 +74,7 @@ fn square_through_the_link_matches_the_in_process_run() {
     let c = host.counters;
     println!(
         "in-process RMSE {:.3} cm, link RMSE {:.3} cm; {} packets sent, {:?}; lockstep {}/{} ticks; watchdog stops {}; clock {:?}",
-        in_process.ekf_position_rmse * 100.0,
+        in_process.position_rmse * 100.0,
         link * 100.0,
         robot.sent,
         c,
@@ -90,9 +90,9 @@ fn square_through_the_link_matches_the_in_process_run() {
         (0, 0, 0, 0, 0)
     );
     assert!(
-        (link - in_process.ekf_position_rmse).abs() <= 0.10 * in_process.ekf_position_rmse,
+        (link - in_process.position_rmse).abs() <= 0.10 * in_process.position_rmse,
         "link {link} m vs in-process {} m",
-        in_process.ekf_position_rmse
+        in_process.position_rmse
     );
     // The host stopped sending after the laps: the watchdog stopped the
     // robot (on a loaded machine a stalled host may trip it earlier too).

@@ -195,7 +195,7 @@ fn square_over_a_serial_link_matches_the_in_process_run() {
     let c = host.counters;
     println!(
         "in-process RMSE {:.3} cm, serial RMSE {:.3} cm; {} packets; {:?}; framing {:?}; lockstep {}/{}",
-        in_process.ekf_position_rmse * 100.0,
+        in_process.position_rmse * 100.0,
         link * 100.0,
         robot.sent,
         c,
@@ -212,9 +212,9 @@ fn square_over_a_serial_link_matches_the_in_process_run() {
     assert_eq!(host.framing.dropped(), 0);
     assert_eq!(robot.framing.dropped(), 0);
     assert!(
-        (link - in_process.ekf_position_rmse).abs() <= 0.10 * in_process.ekf_position_rmse,
+        (link - in_process.position_rmse).abs() <= 0.10 * in_process.position_rmse,
         "serial {link} m vs in-process {} m",
-        in_process.ekf_position_rmse
+        in_process.position_rmse
     );
 }
 

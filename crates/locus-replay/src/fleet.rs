@@ -515,7 +515,7 @@ impl<P: FnMut(Progress)> CostFunction for Problem<'_, P> {
             })?;
             sum += match self.score {
                 Score::Nll => r.innovation_nll,
-                Score::Truth => r.summary.ekf_position_rmse,
+                Score::Truth => r.summary.position_rmse,
             };
         }
         Ok(if sum.is_finite() { sum } else { f64::MAX })
@@ -620,8 +620,8 @@ impl Figures {
             .copied()
             .fold(f64::INFINITY, f64::min);
         Figures {
-            position_rmse_m: keep(moved, r.summary.ekf_position_rmse),
-            heading_rmse_rad: keep(moved, r.summary.ekf_heading_rmse),
+            position_rmse_m: keep(moved, r.summary.position_rmse),
+            heading_rmse_rad: keep(moved, r.summary.heading_rmse),
             odometry_position_rmse_m: keep(moved, r.summary.odometry_position_rmse),
             gated_share: keep(judged, r.gated_share()),
             worst_within_3_sigma: keep(moved, worst),

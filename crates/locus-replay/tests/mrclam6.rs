@@ -74,9 +74,9 @@ fn all_five_robots_beat_odometry_alone() {
             "| {} | {:.0} | {:.3} | {:.3} | {:.2} | {:.2} | {:.1} | {} | {:.1} | {} | {} | {} |",
             i + 1,
             log.duration(),
-            s.ekf_position_rmse,
+            s.position_rmse,
             s.odometry_position_rmse,
-            deg(s.ekf_heading_rmse),
+            deg(s.heading_rmse),
             deg(s.odometry_heading_rmse),
             s.mean_nees,
             r.sightings,
@@ -91,10 +91,10 @@ fn all_five_robots_beat_odometry_alone() {
             i + 1,
             r.compared
         );
-        assert!(s.ekf_position_rmse < EKF_POSITION_BOUND, "robot {}", i + 1);
-        assert!(s.ekf_heading_rmse < EKF_HEADING_BOUND, "robot {}", i + 1);
+        assert!(s.position_rmse < EKF_POSITION_BOUND, "robot {}", i + 1);
+        assert!(s.heading_rmse < EKF_HEADING_BOUND, "robot {}", i + 1);
         assert!(
-            s.ekf_position_rmse < s.odometry_position_rmse,
+            s.position_rmse < s.odometry_position_rmse,
             "robot {}",
             i + 1
         );
@@ -106,28 +106,20 @@ fn all_five_robots_beat_odometry_alone() {
             cfg.odometry_delay,
             s.within_3_sigma.map(|v| 100.0 * v),
             sm.within_3_sigma.map(|v| 100.0 * v),
-            sm.ekf_position_rmse,
-            sm.ekf_heading_rmse,
+            sm.position_rmse,
+            sm.heading_rmse,
             sm.mean_nees
         );
         for share in s.within_3_sigma.iter().chain(&sm.within_3_sigma) {
             assert!(*share >= INSIDE_3_SIGMA, "robot {}: {share}", i + 1);
         }
         assert!(
-            sm.ekf_position_rmse < SMOOTHER_POSITION_BOUND,
+            sm.position_rmse < SMOOTHER_POSITION_BOUND,
             "robot {}",
             i + 1
         );
-        assert!(
-            sm.ekf_heading_rmse < SMOOTHER_HEADING_BOUND,
-            "robot {}",
-            i + 1
-        );
-        assert!(
-            sm.ekf_position_rmse < s.ekf_position_rmse,
-            "robot {}",
-            i + 1
-        );
+        assert!(sm.heading_rmse < SMOOTHER_HEADING_BOUND, "robot {}", i + 1);
+        assert!(sm.position_rmse < s.position_rmse, "robot {}", i + 1);
     }
 }
 
@@ -278,11 +270,11 @@ fn five_percent_corrupted_sightings_raise_the_error_by_less_than_ten_percent() {
     println!("|---|---|---|---|---|---|---|---|---|");
     for (i, log) in logs().iter().enumerate() {
         let (bad, n) = corrupted(log, 100 + i as u64);
-        let clean = run(log, &gated).summary.ekf_position_rmse;
+        let clean = run(log, &gated).summary.position_rmse;
         let r = run(&bad, &gated);
-        let dirty = r.summary.ekf_position_rmse;
-        let clean_open = run(log, &open).summary.ekf_position_rmse;
-        let dirty_open = run(&bad, &open).summary.ekf_position_rmse;
+        let dirty = r.summary.position_rmse;
+        let clean_open = run(log, &open).summary.position_rmse;
+        let dirty_open = run(&bad, &open).summary.position_rmse;
         let rise = dirty / clean - 1.0;
         println!(
             "| {} | {n} of {} | {clean:.3} | {dirty:.3} | {:.1} | {:.1} | {clean_open:.3} | {dirty_open:.3} | {:.0} |",
@@ -332,16 +324,16 @@ fn gating_recovers_from_an_over_confident_start() {
     let p = run(&log, &plain);
     println!(
         "over-confident start, robot 2: with recovery {:.3} m RMSE, {:.1} % gated, {} inflations; plain gate {:.3} m, {:.1} % gated",
-        r.summary.ekf_position_rmse,
+        r.summary.position_rmse,
         100.0 * r.gated_share(),
         r.inflations,
-        p.summary.ekf_position_rmse,
+        p.summary.position_rmse,
         100.0 * p.gated_share()
     );
     assert!(p.gated_share() > 0.99, "the plain gate never recovers");
     // Measured: 29 inflations, 3.8 % gated, 0.336 m (plain: 100 %, 5.95 m).
     assert!(r.inflations > 0 && r.gated_share() < 0.10);
-    assert!(r.summary.ekf_position_rmse < 0.40);
+    assert!(r.summary.position_rmse < 0.40);
 }
 
 /// Robot `log`'s sightings as a sensor mounted `ahead` metres in front of
@@ -378,12 +370,12 @@ fn a_sensor_record_puts_an_off_centre_sensor_where_it_is() {
         .enumerate()
         .filter(|(i, _)| [1, 2].contains(i))
     {
-        let centred = run(log, &cfg).summary.ekf_position_rmse;
+        let centred = run(log, &cfg).summary.position_rmse;
         let mounted = seen_from(log, 0.2, 0.05);
-        let with = run(&mounted, &cfg).summary.ekf_position_rmse;
+        let with = run(&mounted, &cfg).summary.position_rmse;
         let mut ignored = mounted.clone();
         ignored.sensor = locus_logs::SensorMount::default();
-        let without = run(&ignored, &cfg).summary.ekf_position_rmse;
+        let without = run(&ignored, &cfg).summary.position_rmse;
         println!("| {} | {centred:.3} | {with:.3} | {without:.3} |", i + 1);
         // Not identical: the noise is applied in the sensor frame.
         assert!((with / centred - 1.0).abs() < 0.05, "robot {}", i + 1);
@@ -417,25 +409,17 @@ fn a_delay_learned_on_three_robots_serves_the_other_two() {
             "robot {} with the delay of robots 1-3 ({:.2} s): filter {:.3} m {:.3} rad, smoother {:.3} m {:.3} rad, inside 3 sigma {:?} / {:?}",
             i + 1,
             cfg.odometry_delay,
-            s.ekf_position_rmse,
-            s.ekf_heading_rmse,
-            m.ekf_position_rmse,
-            m.ekf_heading_rmse,
+            s.position_rmse,
+            s.heading_rmse,
+            m.position_rmse,
+            m.heading_rmse,
             s.within_3_sigma,
             m.within_3_sigma
         );
-        assert!(s.ekf_position_rmse < EKF_POSITION_BOUND, "robot {}", i + 1);
-        assert!(s.ekf_heading_rmse < EKF_HEADING_BOUND, "robot {}", i + 1);
-        assert!(
-            m.ekf_position_rmse < SMOOTHER_POSITION_BOUND,
-            "robot {}",
-            i + 1
-        );
-        assert!(
-            m.ekf_heading_rmse < SMOOTHER_HEADING_BOUND,
-            "robot {}",
-            i + 1
-        );
+        assert!(s.position_rmse < EKF_POSITION_BOUND, "robot {}", i + 1);
+        assert!(s.heading_rmse < EKF_HEADING_BOUND, "robot {}", i + 1);
+        assert!(m.position_rmse < SMOOTHER_POSITION_BOUND, "robot {}", i + 1);
+        assert!(m.heading_rmse < SMOOTHER_HEADING_BOUND, "robot {}", i + 1);
         for share in s.within_3_sigma.iter().chain(&m.within_3_sigma) {
             assert!(*share >= INSIDE_3_SIGMA, "robot {}: {share}", i + 1);
         }
@@ -471,8 +455,8 @@ fn velocities_ten_percent_off_need_no_hand_set_scale() {
         sb[0].1,
         sb[1].0,
         sb[1].1,
-        a.summary.ekf_position_rmse,
-        b.summary.ekf_position_rmse
+        a.summary.position_rmse,
+        b.summary.position_rmse
     );
     for i in 0..2 {
         // The 10 % shows in the estimate, within its own 3 sigma.
@@ -480,7 +464,7 @@ fn velocities_ten_percent_off_need_no_hand_set_scale() {
         assert!((sb[i].0 - expected).abs() < 3.0 * sb[i].1, "scale {i}");
         assert!((sb[i].0 - expected).abs() < 0.03, "scale {i}");
     }
-    assert!(b.summary.ekf_position_rmse < 1.05 * a.summary.ekf_position_rmse);
+    assert!(b.summary.position_rmse < 1.05 * a.summary.position_rmse);
     for share in b.summary.within_3_sigma {
         assert!(share >= INSIDE_3_SIGMA);
     }
@@ -547,10 +531,10 @@ fn the_first_sightings_fix_the_start_when_the_log_gives_none() {
             fix.inliers,
             fix.landmarks,
             fix.span,
-            a.ekf_position_rmse,
-            b.ekf_position_rmse,
-            sa.ekf_position_rmse,
-            sb.ekf_position_rmse
+            a.position_rmse,
+            b.position_rmse,
+            sa.position_rmse,
+            sb.position_rmse
         );
         for k in 0..3 {
             assert!(
@@ -560,8 +544,8 @@ fn the_first_sightings_fix_the_start_when_the_log_gives_none() {
             );
         }
         ratios.push((
-            a.ekf_position_rmse / b.ekf_position_rmse,
-            sa.ekf_position_rmse / sb.ekf_position_rmse,
+            a.position_rmse / b.position_rmse,
+            sa.position_rmse / sb.position_rmse,
         ));
         for share in a.within_3_sigma.iter().chain(&sa.within_3_sigma) {
             assert!(*share >= INSIDE_3_SIGMA, "robot {}: {share}", i + 1);
@@ -686,10 +670,10 @@ fn the_no_flags_replay_takes_its_noise_from_each_log_and_stays_honest() {
         println!(
             "{}: filter {:.3} m, NEES {:.2}, shares {:?}; smoother {:.3} m, shares {:?}; gap factor {:?}",
             log.name,
-            r.summary.ekf_position_rmse,
+            r.summary.position_rmse,
             r.summary.mean_nees,
             r.summary.within_3_sigma,
-            smoothed.ekf_position_rmse,
+            smoothed.position_rmse,
             smoothed.within_3_sigma,
             settled.estimate.as_ref().map(|e| e.gap_factor)
         );
@@ -707,11 +691,7 @@ fn the_no_flags_replay_takes_its_noise_from_each_log_and_stays_honest() {
             log.name,
             r.summary.mean_nees
         );
-        assert!(
-            r.summary.ekf_position_rmse < EKF_POSITION_BOUND,
-            "{}",
-            log.name
-        );
-        assert!(smoothed.ekf_position_rmse < 0.15, "{}", log.name);
+        assert!(r.summary.position_rmse < EKF_POSITION_BOUND, "{}", log.name);
+        assert!(smoothed.position_rmse < 0.15, "{}", log.name);
     }
 }

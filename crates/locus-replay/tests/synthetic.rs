@@ -75,9 +75,9 @@ fn lines_listed_late_give_the_in_order_estimates() {
     assert_eq!(ra.unknown_sightings, 1);
     assert_eq!(ra.applied, 57, "3 x 19 sightings, none gated");
     assert!(
-        ra.summary.ekf_position_rmse < 0.05,
+        ra.summary.position_rmse < 0.05,
         "{}",
-        ra.summary.ekf_position_rmse
+        ra.summary.position_rmse
     );
 }
 
@@ -243,7 +243,7 @@ fn a_log_with_no_start_and_no_truth_starts_where_its_sightings_put_it() {
     // The robot starts at the origin, heading along x.
     assert!(fix.pose.norm() < 0.05, "{}", fix.pose);
     assert_eq!(fix.landmarks, 3);
-    assert!(r.summary.ekf_position_rmse.is_nan(), "no truth: n/a");
+    assert!(r.summary.position_rmse.is_nan(), "no truth: n/a");
     let mut last_known = None;
     replay(&known, &Config::default(), |s| last_known = Some(*s)).unwrap();
     let (a, b) = (last.unwrap().belief.x, last_known.unwrap().belief.x);

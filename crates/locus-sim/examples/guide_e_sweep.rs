@@ -29,7 +29,7 @@ fn measure(cfg: &SquareConfig) -> Result<(f64, f64), Error> {
                 n += 1;
             }
         })?;
-        rmse += summary.ekf_position_rmse;
+        rmse += summary.position_rmse;
         gain += sum / f64::from(n.max(1));
     }
     #[allow(clippy::cast_precision_loss)]

@@ -351,7 +351,7 @@ impl Set {
 
     /// Mean position RMSE (m).
     fn rmse(&self) -> f64 {
-        self.mean(|r| r.summary.ekf_position_rmse)
+        self.mean(|r| r.summary.position_rmse)
     }
 }
 

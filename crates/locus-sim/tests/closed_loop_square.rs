@@ -17,12 +17,12 @@ fn ekf_beats_odometry_and_the_seed_reproduces_the_run() {
     assert_eq!(a.laps_completed, cfg.laps);
     assert!(a.applied > 100, "{a:?}");
     assert!(
-        a.ekf_position_rmse < 0.25 * a.odometry_position_rmse,
+        a.position_rmse < 0.25 * a.odometry_position_rmse,
         "EKF {} m vs odometry {} m",
-        a.ekf_position_rmse,
+        a.position_rmse,
         a.odometry_position_rmse
     );
-    assert!(a.ekf_position_rmse < 0.05, "{a:?}");
+    assert!(a.position_rmse < 0.05, "{a:?}");
     // Roughly consistent: mean NEES near its 3 dof, most steps inside the
     // 95 % interval.
     assert!((1.0..6.0).contains(&a.mean_nees), "{a:?}");
@@ -39,7 +39,7 @@ fn the_ekf_stays_localised_on_several_seeds() {
     for seed in 1..=5 {
         let s = run_square(&cfg, seed, &mut |_: &StepRecord| {}).expect("run");
         assert!(
-            s.ekf_position_rmse < 0.03 && s.ekf_position_rmse < 0.2 * s.odometry_position_rmse,
+            s.position_rmse < 0.03 && s.position_rmse < 0.2 * s.odometry_position_rmse,
             "seed {seed}: {s:?}"
         );
     }

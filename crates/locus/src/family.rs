@@ -414,14 +414,14 @@ fn cells(o: &Outcome) -> Vec<String> {
                 name,
                 format!(
                     "{} / {} ({})",
-                    fixed(sa.ekf_position_rmse, 3),
-                    fixed(sr.ekf_position_rmse, 3),
-                    ratio(sa.ekf_position_rmse, sr.ekf_position_rmse)
+                    fixed(sa.position_rmse, 3),
+                    fixed(sr.position_rmse, 3),
+                    ratio(sa.position_rmse, sr.position_rmse)
                 ),
                 format!(
                     "{} / {}",
-                    fixed(sa.ekf_heading_rmse, 3),
-                    fixed(sr.ekf_heading_rmse, 3)
+                    fixed(sa.heading_rmse, 3),
+                    fixed(sr.heading_rmse, 3)
                 ),
                 about_offset(
                     o,
@@ -516,8 +516,8 @@ fn criteria(outcomes: &[Outcome], bullet: &str) -> String {
         if nees.is_nan() || nees > 4.5 {
             failed.push("NEES".to_string());
         }
-        if a.summary.ekf_position_rmse.is_nan()
-            || a.summary.ekf_position_rmse > 1.15 * r.summary.ekf_position_rmse
+        if a.summary.position_rmse.is_nan()
+            || a.summary.position_rmse > 1.15 * r.summary.position_rmse
         {
             failed.push("RMSE".to_string());
         }
@@ -596,8 +596,8 @@ fn csv(outcomes: &[Outcome], estimate: &str) -> String {
             let (s, used, level) = match run {
                 Some(r) => (
                     [
-                        r.summary.ekf_position_rmse,
-                        r.summary.ekf_heading_rmse,
+                        r.summary.position_rmse,
+                        r.summary.heading_rmse,
                         r.summary.within_3_sigma[0],
                         r.summary.within_3_sigma[1],
                         r.summary.within_3_sigma[2],

@@ -42,9 +42,9 @@ pub fn summary((estimator, measurement): (&str, &str), s: &Summary) -> String {
     let deg = 180.0 / core::f64::consts::PI;
     table.add_row(vec![
         estimator.to_string(),
-        fig(s.ekf_position_rmse, 100.0, 2),
-        fig(s.ekf_heading_rmse, deg, 2),
-        fig(s.ekf_max_position_error, 100.0, 2),
+        fig(s.position_rmse, 100.0, 2),
+        fig(s.heading_rmse, deg, 2),
+        fig(s.max_position_error, 100.0, 2),
     ]);
     table.add_row(vec![
         "odometry alone".to_string(),

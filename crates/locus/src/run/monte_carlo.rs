@@ -79,8 +79,8 @@ const DEG: f64 = 180.0 / core::f64::consts::PI;
 
 /// The rows of the Monte Carlo table, in order.
 const METRICS: [Metric; 6] = [
-    Metric::new("EKF position RMSE [cm]", CM, |s| s.ekf_position_rmse),
-    Metric::new("EKF heading RMSE [deg]", DEG, |s| s.ekf_heading_rmse),
+    Metric::new("EKF position RMSE [cm]", CM, |s| s.position_rmse),
+    Metric::new("EKF heading RMSE [deg]", DEG, |s| s.heading_rmse),
     Metric::new("odometry position RMSE [cm]", CM, |s| {
         s.odometry_position_rmse
     }),
@@ -206,9 +206,9 @@ fn runs_csv(runs: &[(u64, Summary)]) -> String {
             s.steps.to_string(),
             format!("{:.2}", s.duration),
             s.laps_completed.to_string(),
-            format!("{:.9}", s.ekf_position_rmse),
-            format!("{:.9}", s.ekf_heading_rmse),
-            format!("{:.9}", s.ekf_max_position_error),
+            format!("{:.9}", s.position_rmse),
+            format!("{:.9}", s.heading_rmse),
+            format!("{:.9}", s.max_position_error),
             csv_num(s.odometry_position_rmse),
             csv_num(s.odometry_heading_rmse),
             csv_num(s.odometry_max_position_error),
