@@ -12,6 +12,7 @@ pub mod ir_correction;
 pub mod ir_wall;
 pub mod laser_wall;
 pub mod observer;
+pub mod planar_beam;
 pub mod plausible;
 pub mod range_bearing;
 pub mod settings;
