@@ -1,0 +1,168 @@
+//! Relative pose errors (Kuemmerle et al., "On measuring the accuracy of
+//! SLAM algorithms", Autonomous Robots 27(4), 2009): a trajectory judged by
+//! the relative motions between pairs of times, measured independently
+//! (the Intel lab's relations were verified by hand), rather than against a
+//! global truth that may itself come from the estimator being judged.
+//!
+//! For a relation `delta` (the pose at `t2` in the frame of the pose at
+//! `t1`) and the estimated poses `x1`, `x2` at those times, the error is
+//! `e = (x1^-1 (+) x2) (-) delta`, composed in SE(2); its translational
+//! part is `|(e_x, e_y)|` (m) and its rotational part `|wrap(e_theta)|`
+//! (rad). Units: m, rad.
+
+use locus_core::wrap_angle;
+
+/// A relative pose between two times: the pose at `t2` in the frame of the
+/// pose at `t1`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Relation {
+    /// First time, s.
+    pub t1: f64,
+    /// Second time, s.
+    pub t2: f64,
+    /// Displacement along the first pose's heading, m.
+    pub dx: f64,
+    /// Displacement to its left, m.
+    pub dy: f64,
+    /// Change of heading, rad.
+    pub dtheta: f64,
+}
+
+/// `b` in the frame of `a` (`a^-1 (+) b`), poses `[x, y, theta]`.
+#[must_use]
+pub fn between(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    let (s, c) = a[2].sin_cos();
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    [c * dx + s * dy, -s * dx + c * dy, wrap_angle(b[2] - a[2])]
+}
+
+/// The translational (m) and rotational (rad) error of the estimated
+/// relative pose `estimated` (from [`between`]) against `r`.
+#[must_use]
+pub fn error(estimated: [f64; 3], r: &Relation) -> (f64, f64) {
+    let e = between([r.dx, r.dy, r.dtheta], estimated);
+    (e[0].hypot(e[1]), e[2].abs())
+}
+
+/// The errors of a trajectory over a set of relations.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RelationErrors {
+    /// Relations whose two times the trajectory covers.
+    pub judged: usize,
+    /// Relations left out: a time the trajectory does not cover.
+    pub uncovered: usize,
+    /// Mean translational error, m; NaN when none was judged.
+    pub mean_translation: f64,
+    /// Its standard deviation over the relations, m.
+    pub std_translation: f64,
+    /// Mean rotational error, rad; NaN when none was judged.
+    pub mean_rotation: f64,
+    /// Its standard deviation over the relations, rad.
+    pub std_rotation: f64,
+}
+
+/// The errors of the trajectory `pose_at` (the pose at a time, `None` where
+/// it has none) over `relations`.
+#[must_use]
+#[allow(clippy::cast_precision_loss)]
+pub fn evaluate(
+    relations: &[Relation],
+    mut pose_at: impl FnMut(f64) -> Option<[f64; 3]>,
+) -> RelationErrors {
+    let mut t = Vec::new();
+    let mut r = Vec::new();
+    let mut uncovered = 0;
+    for rel in relations {
+        match (pose_at(rel.t1), pose_at(rel.t2)) {
+            (Some(a), Some(b)) => {
+                let (et, er) = error(between(a, b), rel);
+                t.push(et);
+                r.push(er);
+            }
+            _ => uncovered += 1,
+        }
+    }
+    let stats = |v: &[f64]| {
+        if v.is_empty() {
+            return (f64::NAN, f64::NAN);
+        }
+        let n = v.len() as f64;
+        let mean = v.iter().sum::<f64>() / n;
+        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
+        (mean, var.sqrt())
+    };
+    let (mean_translation, std_translation) = stats(&t);
+    let (mean_rotation, std_rotation) = stats(&r);
+    RelationErrors {
+        judged: t.len(),
+        uncovered,
+        mean_translation,
+        std_translation,
+        mean_rotation,
+        std_rotation,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_trajectory_that_agrees_with_its_relations_has_no_error() {
+        let poses = [[1.0, 2.0, 0.3], [2.0, 2.5, 1.0], [0.5, 3.0, -2.8]];
+        let relations: Vec<Relation> = (0..3)
+            .flat_map(|i| (0..3).map(move |j| (i, j)))
+            .map(|(i, j)| {
+                let d = between(poses[i], poses[j]);
+                Relation {
+                    t1: i as f64,
+                    t2: j as f64,
+                    dx: d[0],
+                    dy: d[1],
+                    dtheta: d[2],
+                }
+            })
+            .collect();
+        let e = evaluate(&relations, |t| poses.get(t as usize).copied());
+        assert_eq!(e.judged, 9);
+        assert!(
+            e.mean_translation < 1e-12 && e.mean_rotation < 1e-12,
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn a_relation_off_by_a_known_motion_has_that_error() {
+        // The relation says 1 m ahead; the trajectory moved 1 m ahead and
+        // 0.1 m left, turned 0.05 rad: error 0.1 m, 0.05 rad.
+        let r = Relation {
+            t1: 0.0,
+            t2: 1.0,
+            dx: 1.0,
+            dy: 0.0,
+            dtheta: 0.0,
+        };
+        let a = [3.0, -1.0, 0.7];
+        let (s, c) = 0.7_f64.sin_cos();
+        let b = [3.0 + c - s * 0.1, -1.0 + s + c * 0.1, 0.75];
+        let (et, er) = error(between(a, b), &r);
+        assert!(
+            (et - 0.1).abs() < 1e-12 && (er - 0.05).abs() < 1e-12,
+            "{et} {er}"
+        );
+    }
+
+    #[test]
+    fn uncovered_relations_are_counted_and_none_judged_is_nan() {
+        let r = Relation {
+            t1: 0.0,
+            t2: 1.0,
+            dx: 1.0,
+            dy: 0.0,
+            dtheta: 0.0,
+        };
+        let e = evaluate(&[r], |_| None);
+        assert_eq!((e.judged, e.uncovered), (0, 1));
+        assert!(e.mean_translation.is_nan() && e.mean_rotation.is_nan());
+    }
+}
