@@ -82,15 +82,12 @@ impl<T: Scalar> MeasurementModel<T, 7, 1> for PlanarBeam<T> {
     ) -> Option<SVector<T, 1>> {
         let [o, o_t, d, d_t] = self.ray(x);
         let n = self.normal;
-        let facing = -n.dot(&d);
-        // Facing the plane from its front, no more than `max_incidence`
-        // off its normal.
-        if !(facing >= self.max_incidence.cos()) {
-            return None;
-        }
         let nd = n.dot(&d);
+        // Facing the plane from its front, no more than `max_incidence`
+        // off its normal (false for NaN too).
+        let facing = -nd >= self.max_incidence.cos();
         let h = n.dot(&(self.point - o)) / nd;
-        if !(h >= self.min_range) {
+        if !(facing && h >= self.min_range) {
             return None;
         }
         if let Some(j) = jacobian {
