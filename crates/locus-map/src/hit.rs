@@ -43,7 +43,9 @@ pub(crate) fn direction(angle: f64) -> [f64; 2] {
 pub(crate) fn facing(n: [f64; 2], d: [f64; 2]) -> ([f64; 2], f64) {
     let dot = n[0] * d[0] + n[1] * d[1];
     let n = if dot > 0.0 { [-n[0], -n[1]] } else { n };
-    (n, dot.abs().min(1.0).acos())
+    // atan2, not acos: accurate near head-on too.
+    let cross = n[0] * d[1] - n[1] * d[0];
+    (n, cross.abs().atan2(dot.abs()))
 }
 
 /// Whether a cast's inputs admit a hit: finite origin and angle, a

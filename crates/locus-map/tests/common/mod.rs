@@ -95,5 +95,7 @@ pub fn temp_dir(name: &str) -> PathBuf {
 
 /// The angle (rad) between two unit vectors.
 pub fn angle_between(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] * b[0] + a[1] * b[1]).clamp(-1.0, 1.0).acos()
+    (a[0] * b[1] - a[1] * b[0])
+        .atan2(a[0] * b[0] + a[1] * b[1])
+        .abs()
 }
