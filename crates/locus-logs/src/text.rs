@@ -331,7 +331,7 @@ impl<'a> Fields<'a> {
 
     /// The next field as a finite number for which `ok` holds; else an
     /// out-of-range error quoting `expected`.
-    fn bounded(
+    pub(crate) fn bounded(
         &mut self,
         field: &'static str,
         ok: impl Fn(f64) -> bool,
@@ -356,6 +356,18 @@ impl<'a> Fields<'a> {
         let text = self.next_text(field)?;
         text.parse::<u32>()
             .map_err(|_| self.field_error(field, FieldProblem::NotAnInteger(excerpt(text))))
+    }
+
+    /// The next field as text, or `None` if the line ends before it (the
+    /// column moves on either way).
+    pub(crate) fn optional_text(&mut self) -> Option<&'a str> {
+        self.column += 1;
+        self.it.next()
+    }
+
+    /// The number of fields left on the line (consumed).
+    pub(crate) fn count_rest(&mut self) -> usize {
+        self.it.by_ref().count()
     }
 
     /// Checks that no field is left (the format has `columns` columns).
