@@ -145,8 +145,8 @@ pub enum Error {
         /// The file looked for (without `.xz`).
         path: PathBuf,
     },
-    /// The file is not a valid xz stream.
-    #[error("{}: xz decompression failed", path.display())]
+    /// The file is not a valid xz (or gzip) stream.
+    #[error("{}: {} decompression failed", path.display(), if path.extension().is_some_and(|e| e == "gz") { "gzip" } else { "xz" })]
     Decompress {
         /// The file.
         path: PathBuf,

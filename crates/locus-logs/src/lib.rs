@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 #![forbid(unsafe_code)]
 
+pub mod aer1513;
 pub mod beam_sensor;
 pub mod decimal;
 pub mod error;
