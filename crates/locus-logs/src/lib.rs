@@ -3,6 +3,7 @@
 
 pub mod aer1513;
 pub mod beam_sensor;
+pub mod carmen;
 pub mod decimal;
 pub mod error;
 pub mod librsf;
@@ -10,7 +11,9 @@ pub mod lines;
 pub mod locus_csv;
 pub mod mrclam;
 pub mod noise;
+pub mod relations;
 pub mod scans;
+pub mod se2;
 pub mod sensor;
 pub mod sighting;
 mod text;
