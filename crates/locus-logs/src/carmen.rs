@@ -133,7 +133,8 @@ pub fn parse(text: &str, path: &Path) -> Result<Carmen> {
     for mut f in records(text, path) {
         match f.next_text("kind")? {
             "PARAM" => {
-                if f.next_text("name")? == "robot_frontlaser_offset" {
+                let name = f.next_text("name")?;
+                if name == "robot_frontlaser_offset" {
                     offset = f.f64("value")?;
                 }
             }
