@@ -13,7 +13,7 @@
 //!   the corrected pose `x y theta`;
 //! - `ODOM x y theta tv rv accel ipc_time host logger_time`: a pose. The
 //!   first `ODOM` after a `FLASER` is the reset to the corrected pose (its
-//!   time 0); the ones after it add raw odometry increments, so the raw
+//!   time 0 or garbage; a reset of another pose is an error); the ones after it add raw odometry increments, so the raw
 //!   motion from one scan to the next is `(reset)^-1 (+) (last ODOM before
 //!   the next scan)`.
 //!
@@ -54,7 +54,7 @@
 use std::path::Path;
 
 use crate::beam_sensor::BeamSensor;
-use crate::error::{Error, FieldProblem, Result};
+use crate::error::{Error, FieldProblem, RecordProblem, Result};
 use crate::locus_csv::LocusLog;
 use crate::mrclam::{Groundtruth, Odometry, TruthPose};
 use crate::scans::Scans;
@@ -129,7 +129,8 @@ pub fn parse(text: &str, path: &Path) -> Result<Carmen> {
     let mut stamps: Vec<f64> = Vec::new();
     let mut raw: Vec<f64> = Vec::new();
     let mut events: Vec<(f64, Event)> = Vec::new();
-    let mut after_scan = false;
+    // The line of the last FLASER, while its reset ODOM is awaited.
+    let mut after_scan: Option<usize> = None;
     for mut f in records(text, path) {
         match f.next_text("kind")? {
             "PARAM" => {
@@ -157,11 +158,12 @@ pub fn parse(text: &str, path: &Path) -> Result<Carmen> {
                     f.next_text(name)?;
                 }
                 let stamp = f.f64("logger_time")?;
+                let line = f.line;
                 f.end(2 + n as usize + 9)?;
                 events.push((stamp, Event::Scan(poses.len())));
                 poses.push(pose);
                 stamps.push(stamp);
-                after_scan = true;
+                after_scan = Some(line);
             }
             "ODOM" => {
                 let pose = [f.f64("x")?, f.f64("y")?, f.f64("theta")?];
@@ -169,13 +171,21 @@ pub fn parse(text: &str, path: &Path) -> Result<Carmen> {
                     f.next_text(name)?;
                 }
                 let stamp = f.f64("logger_time")?;
-                f.end(10)?;
                 // The first ODOM after a scan is its reset (the scan's
                 // pose); ODOM lines before the first scan are skipped.
-                if after_scan {
-                    after_scan = false;
+                if let Some(first_line) = after_scan.take() {
+                    if poses.last() != Some(&pose) {
+                        return Err(f.record_error(RecordProblem::Disagrees {
+                            what: "the ODOM after a FLASER resets to its pose: this one differs from",
+                            first_line,
+                        }));
+                    }
+                    f.end(10)?;
                 } else if !poses.is_empty() {
+                    f.end(10)?;
                     events.push((stamp, Event::Odom(pose)));
+                } else {
+                    f.end(10)?;
                 }
             }
             _ => {}
@@ -370,5 +380,94 @@ fn segment_odometry(kept: &[(f64, Pose)], out: &mut Vec<Odometry>) {
             v: 0.0,
             omega: 0.0,
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::se2::dead_reckon;
+
+    fn p() -> &'static Path {
+        Path::new("intel.log")
+    }
+
+    /// A log of three 2-beam scans (beams at -90 and -89 degrees, not the
+    /// Intel log's 180): raw odometry before the first scan (skipped), an
+    /// ODOM stamped before its scan, and a burst of ODOM lines 1 ms apart.
+    const LOG: &str = "# CARMEN\nPARAM robot_frontlaser_offset 0.05 nohost 0\n\
+        ODOM 0 0 0 0 0 0 0.5 pippo 0.5\n\
+        FLASER 2 1.5 81.83 1 2 0.5 1 2 0.5 1 pippo 1\n\
+        ODOM 1 2 0.5 0 0 0 0 pippo 0\nNEFF 15\n\
+        ODOM 1.1 2.05 0.55 0 0 0 0.9 pippo 0.9\n\
+        ODOM 1.3 2.1 0.6 0 0 0 1.5 pippo 1.5\n\
+        ODOM 1.31 2.1 0.6 0 0 0 1.501 pippo 1.501\n\
+        ODOM 1.5 2.2 0.4 0 0 0 2 pippo 2\n\
+        FLASER 2 2 3 1.6 2.1 0.45 1.6 2.1 0.45 2 pippo 2\n\
+        ODOM 1.6 2.1 0.45 0 0 0 0 pippo 0\n\
+        ODOM 1.6 2.1 0.5 0 0 0 2.5 pippo 2.5\n\
+        FLASER 2 2 3 1.7 2.1 0.5 1.7 2.1 0.5 3 pippo 3\n\
+        ODOM 1.7 2.1 0.5 0 0 0 0 pippo 0\nODOM 9 9 9 0 0 0 4 pippo 4\n";
+
+    #[test]
+    fn scans_truth_and_odometry_that_dead_reckons_the_raw_motion() {
+        let c = parse(LOG, p()).unwrap();
+        let log = &c.log;
+        assert_eq!(log.scans.len(), 3);
+        assert_eq!(c.scan_stamps, [1.0, 2.0, 3.0]);
+        assert_eq!(log.beam_sensors[0].mount.x, 0.05);
+        assert_eq!(log.beam_sensors[0].count, 2);
+        let first = log.scans.get(0).unwrap();
+        assert_eq!(first.ranges, [1.5, crate::scans::NO_RETURN]);
+        assert_eq!(log.truth.poses()[1].x, 1.6);
+        // The ODOM stamped 0.9 pulls its scan back from 1 s.
+        assert_eq!(log.scans.times(), [0.9, 2.0, 3.0]);
+        assert_eq!((c.retimed, c.largest_retime), (1, 0.09999999999999998));
+        assert_eq!(c.raw_motion.len(), 2);
+        for (k, want) in c.raw_motion.iter().enumerate() {
+            let times = log.scans.times();
+            let got = dead_reckon(&log.odometry, times[k], times[k + 1]);
+            for i in 0..3 {
+                assert!((got[i] - want[i]).abs() < 1e-12, "{k}: {got:?} {want:?}");
+            }
+        }
+        // Nothing after the last scan, nothing before the first.
+        assert!(log.odometry.iter().all(|o| (0.9..=3.0).contains(&o.time)));
+        assert_eq!(c.timeless_segments, 0);
+    }
+
+    #[test]
+    fn malformed_logs_name_the_line_and_field() {
+        let e = parse("ODOM 0 0 0 0 0 0 1 h 1\n", p()).unwrap_err();
+        assert_eq!(e.to_string(), "intel.log: no FLASER line");
+        let e = parse(
+            "FLASER 2 1 1 0 0 0 0 0 0 1 h 1\nFLASER 3 1 1 1 0 0 0 0 0 0 2 h 2\n",
+            p(),
+        )
+        .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "intel.log:2: field \"n\" (column 2): 3 is out of range: \
+             > 0 and the beam count of the first FLASER line"
+        );
+        let e = parse("FLASER 2 1 -1 0 0 0 0 0 0 1 h 1\n", p()).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "intel.log:1: field \"range\" (column 4): -1 is out of range: >= 0"
+        );
+        let e = parse("FLASER 2 1 1 0 0 0 0 0 0 1 h\n", p()).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "intel.log:1: field \"logger_time\" (column 13): missing"
+        );
+        let e = parse(
+            "FLASER 1 1 0 0 0 0 0 0 1 h 1\n\nODOM 0 1 0 0 0 0 0 h 0\n",
+            p(),
+        )
+        .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "intel.log:3: the ODOM after a FLASER resets to its pose: this one differs from line 1"
+        );
     }
 }
