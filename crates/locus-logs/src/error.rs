@@ -33,6 +33,17 @@ pub enum FieldProblem {
         /// What the field allows.
         expected: &'static str,
     },
+    /// A scan's ranges do not number its beam sensor's beams (the column
+    /// is that of the first range missing or too many).
+    #[error("{found} ranges, beam sensor {sensor} has {expected} beams")]
+    BeamCount {
+        /// Ranges on the line.
+        found: usize,
+        /// Beams of the sensor.
+        expected: u32,
+        /// The sensor's id.
+        sensor: u32,
+    },
 }
 
 /// What is wrong with a record (a line) as a whole, or with its relation to
@@ -134,8 +145,8 @@ pub enum Error {
         /// The file looked for (without `.xz`).
         path: PathBuf,
     },
-    /// The file is not a valid xz stream.
-    #[error("{}: xz decompression failed", path.display())]
+    /// The file is not a valid xz (or gzip) stream.
+    #[error("{}: {} decompression failed", path.display(), if path.extension().is_some_and(|e| e == "gz") { "gzip" } else { "xz" })]
     Decompress {
         /// The file.
         path: PathBuf,
@@ -190,6 +201,15 @@ pub enum Error {
         line: usize,
         /// What is wrong.
         problem: RecordProblem,
+    },
+    /// A record the file must hold is absent (e.g. a dataset's header
+    /// line, or any scan in a laser log).
+    #[error("{}: no {what}", path.display())]
+    Missing {
+        /// The file.
+        path: PathBuf,
+        /// What is missing, e.g. "FLASER line".
+        what: &'static str,
     },
     /// A robot number outside the dataset's robots.
     #[error("no robot {robot}: the dataset has robots {first}-{last}")]

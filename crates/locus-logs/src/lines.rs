@@ -17,6 +17,14 @@ pub struct Lines {
     /// The `start` line's.
     pub start: Option<usize>,
     /// Each `noise` record's, in the order of
-    /// [`NoiseRecords::NAMES`](crate::NoiseRecords::NAMES).
-    pub noise: [Option<usize>; 4],
+    /// [`NoiseRecords::ALL_NAMES`](crate::NoiseRecords::ALL_NAMES).
+    pub noise: [Option<usize>; 5],
+    /// Each wall's (version 4).
+    pub walls: Vec<usize>,
+    /// The `map` line's (version 4).
+    pub map: Option<usize>,
+    /// Each beam sensor's (version 4).
+    pub beam_sensors: Vec<usize>,
+    /// Each scan's (version 4).
+    pub scans: Vec<usize>,
 }

@@ -6,13 +6,17 @@
 //! | kind | fields | units |
 //! |---|---|---|
 //! | `sensor` | x, y, yaw | m, m, rad (robot frame) |
-//! | `noise` | name, value | `q_v` m^2/s, `q_omega` rad^2/s, `sigma_range` m, `sigma_bearing` rad |
+//! | `noise` | name, value | `q_v` m^2/s, `q_omega` rad^2/s, `sigma_range` m, `sigma_bearing` rad, `sigma_beam` m |
 //! | `landmark` | id, x, y | -, m, m |
 //! | `start` | t, x, y, theta | s, m, m, rad |
 //! | `odometry` | t, v, omega | s, m/s, rad/s |
 //! | `measurement` | t, id, range, bearing | s, -, m (>= 0), rad |
 //! | `range` | t, id, range | s, -, m (>= 0) (version 3: range only) |
 //! | `truth` | t, x, y, theta or t, x, y | s, m, m, rad (version 3: theta optional) |
+//! | `wall` | x1, y1, x2, y2 | m (version 4) |
+//! | `map` | path | relative to the log's directory (version 4) |
+//! | `beam_sensor` | id, x, y, yaw, min_range, max_range, angle_0, angle_step, count | -, m, m, rad, m, m, rad, rad, - (version 4) |
+//! | `scan` | t, id, r_1 ... r_count | s, -, m or `max` or `-` (version 4) |
 //!
 //! Lines starting with `#` and blank lines are skipped. Odometry and truth
 //! times must not decrease; truth lines all give a heading or none;
@@ -21,17 +25,31 @@
 //! landmark ids are unique; `start` and `sensor` appear at most once, and
 //! each noise name at most once. Measurements are taken by the sensor of the
 //! `sensor` line (at the robot's centre, along its heading, if there is
-//! none). Errors name the file, line, column and field.
+//! none). Version 4: walls and at most one `map` line; beam sensor ids are
+//! unique, a `scan` names a beam sensor declared above it and gives one
+//! range per beam; scan times do not decrease. Errors name the file, line,
+//! column and field.
 
 use std::path::{Path, PathBuf};
 
+use crate::beam_sensor::{BeamSensor, MAX_BEAMS, MAX_MOUNT_OFFSET, MAX_RANGE_LIMIT};
 use crate::decimal::push_f64;
 use crate::error::{FieldProblem, RecordProblem, Result, excerpt};
 use crate::lines::Lines;
 use crate::mrclam::{Groundtruth, Odometry, TruthPose};
 use crate::noise::NoiseRecords;
+use crate::scans::{MISSING, NO_RETURN, Scans};
 use crate::sensor::SensorMount;
-use crate::text::{TimeOrder, csv_records, existing, read_text};
+use crate::text::{Fields, TimeOrder, csv_records, existing, read_text};
+use crate::wall::{MapPath, Wall};
+
+/// Largest coordinate of a wall a reader accepts, m (100 km, as the
+/// replay's limit on a landmark's).
+pub const MAX_COORDINATE: f64 = 1e5;
+
+/// One turn, rad: the largest angle (mount yaw, first beam angle, angle
+/// step) a reader accepts, in magnitude.
+const TURN: f64 = core::f64::consts::TAU;
 
 /// A landmark of the map: an id and a position.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -79,21 +97,41 @@ pub struct LocusLog {
     /// Ground truth (empty if the log has none), time order; positions only
     /// ([`Groundtruth::positions`]) if its lines give no heading.
     pub truth: Groundtruth,
+    /// Walls of the map (`wall` lines), in file order (version 4).
+    pub walls: Vec<Wall>,
+    /// The map file (`map` line), if given, as recorded (version 4); see
+    /// [`MapPath::resolve`].
+    pub map: Option<MapPath>,
+    /// Beam sensors (`beam_sensor` lines), in file order (version 4).
+    pub beam_sensors: Vec<BeamSensor>,
+    /// Scans (`scan` lines), in file order, times not decreasing
+    /// (version 4).
+    pub scans: Scans,
+}
+
+impl LocusLog {
+    /// The beam sensor of id `id`, if the log declares one.
+    #[must_use]
+    pub fn beam_sensor(&self, id: u32) -> Option<&BeamSensor> {
+        self.beam_sensors.iter().find(|s| s.id == id)
+    }
 }
 
 /// The kinds a line may start with.
-const KINDS: &str = "one of sensor, noise, landmark, start, odometry, measurement, range, truth";
+const KINDS: &str = "one of sensor, noise, landmark, start, odometry, measurement, range, \
+                     truth, wall, map, beam_sensor, scan";
 
 /// The names a `noise` line may give.
-const NOISE_NAMES: &str = "one of q_v, q_omega, sigma_range, sigma_bearing";
+const NOISE_NAMES: &str = "one of q_v, q_omega, sigma_range, sigma_bearing, sigma_beam";
 
 /// What a repeated `noise` line is called in its error, by name (in the
-/// order of [`NoiseRecords::NAMES`]).
-const NOISE_WHAT: [&str; 4] = [
+/// order of [`NoiseRecords::ALL_NAMES`]).
+const NOISE_WHAT: [&str; 5] = [
     "noise q_v",
     "noise q_omega",
     "noise sigma_range",
     "noise sigma_bearing",
+    "noise sigma_beam",
 ];
 
 /// Parses the text of a Locus log; `path` names it in errors.
@@ -118,6 +156,7 @@ pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Lines)> {
     let odometry_lines = &mut lines.odometry;
     let mut odometry_order = TimeOrder::new();
     let mut truth_order = TimeOrder::new();
+    let mut scan_order = TimeOrder::new();
     let mut truth: Vec<TruthPose> = Vec::new();
     // The first truth line and whether it gives a heading.
     let mut truth_heading: Option<(usize, bool)> = None;
@@ -147,7 +186,7 @@ pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Lines)> {
             }
             "noise" => {
                 let name = f.next_text("name")?;
-                let Some(k) = NoiseRecords::NAMES.iter().position(|n| *n == name) else {
+                let Some(k) = NoiseRecords::ALL_NAMES.iter().position(|n| *n == name) else {
                     return Err(f.field_error(
                         "name",
                         FieldProblem::OutOfRange {
@@ -256,6 +295,63 @@ pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Lines)> {
                     theta: theta.unwrap_or(0.0),
                 });
             }
+            "wall" => {
+                let w = wall(&mut f)?;
+                f.end(5)?;
+                log.walls.push(w);
+                lines.walls.push(line);
+            }
+            "map" => {
+                let text = f.next_text("path")?;
+                let Some(path) = MapPath::new(text) else {
+                    return Err(f.field_error(
+                        "path",
+                        FieldProblem::OutOfRange {
+                            value: format!("{:?}", excerpt(text)),
+                            expected: "a non-empty path",
+                        },
+                    ));
+                };
+                if let Some(first_line) = lines.map {
+                    return Err(f.record_error(RecordProblem::DuplicateRecord {
+                        what: "map line",
+                        first_line,
+                    }));
+                }
+                f.end(2)?;
+                log.map = Some(path);
+                lines.map = Some(line);
+            }
+            "beam_sensor" => {
+                let s = beam_sensor(&mut f)?;
+                if let Some(i) = log.beam_sensors.iter().position(|b| b.id == s.id) {
+                    return Err(f.record_error(RecordProblem::Duplicate {
+                        what: "beam sensor id",
+                        value: s.id,
+                        first_line: lines.beam_sensors[i],
+                    }));
+                }
+                f.end(10)?;
+                log.beam_sensors.push(s);
+                lines.beam_sensors.push(line);
+            }
+            "scan" => {
+                let time = f.f64("time")?;
+                scan_order.check(&f, time)?;
+                let id = f.u32("id")?;
+                let Some(sensor) = log.beam_sensors.iter().find(|b| b.id == id) else {
+                    return Err(f.field_error(
+                        "id",
+                        FieldProblem::OutOfRange {
+                            value: id.to_string(),
+                            expected: "the id of a beam_sensor line above this one",
+                        },
+                    ));
+                };
+                scan_ranges(&mut f, sensor, &mut log.scans)?;
+                log.scans.close(time, id);
+                lines.scans.push(line);
+            }
             other => {
                 return Err(f.field_error(
                     "kind",
@@ -275,6 +371,145 @@ pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Lines)> {
     }
     .unwrap_or_default();
     Ok((log, lines))
+}
+
+/// The next field as a finite number within `+-limit`.
+fn within(
+    f: &mut Fields<'_>,
+    field: &'static str,
+    limit: f64,
+    expected: &'static str,
+) -> Result<f64> {
+    f.bounded(field, |v| v.abs() <= limit, expected)
+}
+
+/// The fields of a `wall` line after its kind.
+fn wall(f: &mut Fields<'_>) -> Result<Wall> {
+    const WITHIN: &str = "within +-1e5 m";
+    let w = Wall {
+        x1: within(f, "x1", MAX_COORDINATE, WITHIN)?,
+        y1: within(f, "y1", MAX_COORDINATE, WITHIN)?,
+        x2: within(f, "x2", MAX_COORDINATE, WITHIN)?,
+        y2: within(f, "y2", MAX_COORDINATE, WITHIN)?,
+    };
+    if w.x1 == w.x2 && w.y1 == w.y2 {
+        return Err(f.field_error(
+            "y2",
+            FieldProblem::OutOfRange {
+                value: w.y2.to_string(),
+                expected: "a second end apart from the first (a wall of non-zero length)",
+            },
+        ));
+    }
+    Ok(w)
+}
+
+/// The fields of a `beam_sensor` line after its kind.
+fn beam_sensor(f: &mut Fields<'_>) -> Result<BeamSensor> {
+    const OFFSET: &str = "within +-10 m of the robot's centre";
+    const ANGLE: &str = "within one turn, +-2 pi rad";
+    let id = f.u32("id")?;
+    let mount = SensorMount {
+        x: within(f, "x", MAX_MOUNT_OFFSET, OFFSET)?,
+        y: within(f, "y", MAX_MOUNT_OFFSET, OFFSET)?,
+        yaw: within(f, "yaw", TURN, ANGLE)?,
+    };
+    let min_range = f.bounded(
+        "min_range",
+        |v| (0.0..MAX_RANGE_LIMIT).contains(&v),
+        ">= 0 and < 1e5 m",
+    )?;
+    let max_range = f.bounded(
+        "max_range",
+        |v| v > min_range && v <= MAX_RANGE_LIMIT,
+        "> min_range and <= 1e5 m",
+    )?;
+    let angle_0 = within(f, "angle_0", TURN, ANGLE)?;
+    let angle_step = within(f, "angle_step", TURN, ANGLE)?;
+    let text = f.next_text("count")?;
+    let count = match text.parse::<u32>() {
+        Ok(n) if (1..=MAX_BEAMS).contains(&n) => n,
+        Ok(n) => {
+            return Err(f.field_error(
+                "count",
+                FieldProblem::OutOfRange {
+                    value: n.to_string(),
+                    expected: "1 to 100000 beams",
+                },
+            ));
+        }
+        Err(_) => {
+            return Err(f.field_error("count", FieldProblem::NotAnInteger(excerpt(text))));
+        }
+    };
+    if angle_step.abs() * f64::from(count - 1) > TURN * (1.0 + 1e-12) {
+        // The column of the step, two fields back.
+        return Err(f.field_error(
+            "angle_step",
+            FieldProblem::OutOfRange {
+                value: angle_step.to_string(),
+                expected: "beams within one turn: |angle_step| (count - 1) <= 2 pi rad",
+            },
+        ));
+    }
+    Ok(BeamSensor {
+        id,
+        mount,
+        min_range,
+        max_range,
+        angle_0,
+        angle_step,
+        count,
+    })
+}
+
+/// Reads the ranges of a `scan` line (after its id) into `scans`: exactly
+/// `sensor.count` of them, each a number `>= 0`, `max` or `-`, stored as
+/// [`BeamSensor::classify`] says.
+fn scan_ranges(f: &mut Fields<'_>, sensor: &BeamSensor, scans: &mut Scans) -> Result<()> {
+    let count = |found| FieldProblem::BeamCount {
+        found,
+        expected: sensor.count,
+        sensor: sensor.id,
+    };
+    for k in 0..sensor.count as usize {
+        let Some(text) = f.optional_text() else {
+            return Err(f.field_error("range", count(k)));
+        };
+        let stored = match text {
+            "max" => NO_RETURN,
+            "-" => MISSING,
+            _ => {
+                // Checked as f64 (finite, >= 0), stored as the f32 nearest
+                // the text (not rounded twice).
+                let v = match text.parse::<f64>() {
+                    Ok(v) if v.is_finite() => v,
+                    Ok(_) => {
+                        return Err(f.field_error("range", FieldProblem::NotFinite(excerpt(text))));
+                    }
+                    Err(_) => {
+                        return Err(f.field_error("range", FieldProblem::NotANumber(excerpt(text))));
+                    }
+                };
+                if v < 0.0 {
+                    return Err(f.field_error(
+                        "range",
+                        FieldProblem::OutOfRange {
+                            value: v.to_string(),
+                            expected: ">= 0, max or -",
+                        },
+                    ));
+                }
+                sensor.classify(text.parse::<f32>().unwrap_or(NO_RETURN))
+            }
+        };
+        scans.push_range(stored);
+    }
+    if f.optional_text().is_some() {
+        let found = sensor.count as usize + 1 + f.count_rest();
+        return Err(f.field_error("range", count(found)));
+    }
+    Ok(())
 }
 
 fn pose(f: &mut crate::text::Fields<'_>) -> Result<TruthPose> {
@@ -313,13 +548,19 @@ pub fn read_with_lines(path: &Path) -> Result<(LocusLog, Lines, PathBuf)> {
 
 /// Writes a log in this format (the inverse of [`parse`]; numbers as
 /// Rust's `Display` writes them, the shortest form that reads back to the
-/// same value, so `parse(write(log)) == log`).
+/// same value, so `parse(write(log)) == log`). Scan ranges are written as
+/// the shortest text that reads back to the same `f32`, `max` for
+/// [`NO_RETURN`] and `-` for any other non-finite value; the round trip
+/// holds for a log whose scans name its beam sensors, with as many ranges
+/// as beams, each [`NO_RETURN`], [`MISSING`] or within the sensor's limits
+/// (what [`parse`] gives), and whose map path a [`MapPath`] accepted.
 #[must_use]
 pub fn write(log: &LocusLog) -> String {
     use core::fmt::Write as _;
     let lines = 1 + log.landmarks.len() + log.truth.poses().len() + log.odometry.len();
     let mut s = String::with_capacity(64 * (lines + log.measurements.len()));
-    s.push_str("# Locus log v3 (docs/log-format.md); SI units\n");
+    s.reserve(12 * log.scans.ranges_len() + 48 * log.scans.len());
+    s.push_str("# Locus log v4 (docs/log-format.md); SI units\n");
     if let Some(m) = log.sensor {
         record(&mut s, "sensor", &[m.x, m.y, m.yaw]);
     }
@@ -331,6 +572,32 @@ pub fn write(log: &LocusLog) -> String {
     for l in &log.landmarks {
         let _ = write!(s, "landmark,{}", l.id);
         record(&mut s, "", &[l.x, l.y]);
+    }
+    for w in &log.walls {
+        record(&mut s, "wall", &[w.x1, w.y1, w.x2, w.y2]);
+    }
+    if let Some(m) = &log.map {
+        s.push_str("map,");
+        s.push_str(m.as_str());
+        s.push('\n');
+    }
+    for b in &log.beam_sensors {
+        let _ = write!(s, "beam_sensor,{}", b.id);
+        let m = b.mount;
+        let values = [
+            m.x,
+            m.y,
+            m.yaw,
+            b.min_range,
+            b.max_range,
+            b.angle_0,
+            b.angle_step,
+        ];
+        for v in values {
+            s.push(',');
+            push_f64(&mut s, v);
+        }
+        let _ = writeln!(s, ",{}", b.count);
     }
     if let Some(p) = log.start {
         record(&mut s, "start", &[p.time, p.x, p.y, p.theta]);
@@ -358,6 +625,24 @@ pub fn write(log: &LocusLog) -> String {
             Some(b) => record(&mut s, "", &[m.range, b]),
             None => record(&mut s, "", &[m.range]),
         }
+    }
+    let mut buffer = ryu::Buffer::new();
+    for scan in log.scans.iter() {
+        s.push_str("scan,");
+        push_f64(&mut s, scan.time);
+        let _ = write!(s, ",{}", scan.sensor);
+        for r in scan.ranges {
+            s.push(',');
+            if *r == NO_RETURN {
+                s.push_str("max");
+            } else if r.is_finite() {
+                let text = buffer.format_finite(*r);
+                s.push_str(text.strip_suffix(".0").unwrap_or(text));
+            } else {
+                s.push('-');
+            }
+        }
+        s.push('\n');
     }
     s
 }
@@ -419,7 +704,7 @@ mod tests {
             }
         );
         let written = write(&log);
-        assert!(written.starts_with("# Locus log v3"), "{written}");
+        assert!(written.starts_with("# Locus log v4"), "{written}");
         assert!(
             written.contains("\nsensor,0.1,-0.02,1.5707963267948966\n"),
             "{written}"
@@ -502,7 +787,7 @@ mod tests {
         assert_eq!(
             message("\nnoise,sigma_rng,0.2\n"),
             "log.csv:2: field \"name\" (column 2): sigma_rng is out of range: \
-             one of q_v, q_omega, sigma_range, sigma_bearing"
+             one of q_v, q_omega, sigma_range, sigma_bearing, sigma_beam"
         );
         assert_eq!(
             message("noise,q_omega,0\n"),
@@ -626,6 +911,243 @@ mod tests {
         assert!(e.to_string().contains("already appeared on line 1"), "{e}");
         let e = parse("truth,0,1,2,3,4\n", p()).unwrap_err();
         assert!(e.to_string().contains("6 fields, the format has 5"), "{e}");
+    }
+
+    /// A version 4 log: a map, two beam sensors (a lidar and an IR
+    /// sensor) and their scans.
+    const V4: &str = "# Locus log v4\nwall,0,-1,4,-1\nwall, 4 ,-1,4,3\nmap,maps/arena.yaml\n\
+                      beam_sensor,0,0.1,0,0,0.05,8,-1.5707963267948966,0.7853981633974483,5\n\
+                      beam_sensor,7,0,0.05,1.5707963267948966,0.1,0.8,0,0,1\n\
+                      noise,sigma_beam,0.02\nodometry,0,0.1,0\n\
+                      scan,0.1,0,1.5,max,-,2.25,8\nscan,0.1,7,0.5\nscan,0.2,7,0.01\n\
+                      scan,0.3,0,9,0.04,1e-1,3.0000003,7.99\n";
+
+    #[test]
+    fn version_4_records_read_and_round_trip() {
+        let (log, lines) = parse_with_lines(V4, p()).unwrap();
+        assert_eq!(
+            log.walls,
+            [
+                Wall {
+                    x1: 0.0,
+                    y1: -1.0,
+                    x2: 4.0,
+                    y2: -1.0
+                },
+                Wall {
+                    x1: 4.0,
+                    y1: -1.0,
+                    x2: 4.0,
+                    y2: 3.0
+                }
+            ]
+        );
+        assert_eq!(log.map.as_ref().unwrap().as_str(), "maps/arena.yaml");
+        assert_eq!(lines.walls, [2, 3]);
+        assert_eq!(lines.map, Some(4));
+        assert_eq!(lines.beam_sensors, [5, 6]);
+        assert_eq!(lines.scans, [9, 10, 11, 12]);
+        assert_eq!(lines.noise[4], Some(7));
+        assert_eq!(log.noise.sigma_beam, Some(0.02));
+        let lidar = log.beam_sensor(0).unwrap();
+        assert_eq!(lidar.count, 5);
+        assert_eq!(lidar.mount.x, 0.1);
+        assert!((lidar.angle(4) - core::f64::consts::FRAC_PI_2).abs() < 1e-15);
+        assert_eq!(
+            log.beam_sensor(7).unwrap().mount.yaw,
+            core::f64::consts::FRAC_PI_2
+        );
+        assert!(log.beam_sensor(1).is_none());
+        assert_eq!(log.scans.len(), 4);
+        let first = log.scans.get(0).unwrap();
+        assert_eq!((first.time, first.sensor), (0.1, 0));
+        assert_eq!(first.ranges[0], 1.5);
+        assert_eq!(first.ranges[1], NO_RETURN);
+        assert!(first.ranges[2].is_nan());
+        assert_eq!(
+            first.ranges[4], NO_RETURN,
+            "a reading at max_range is no return"
+        );
+        assert!(
+            log.scans.get(2).unwrap().ranges[0].is_nan(),
+            "a reading below min_range is missing"
+        );
+        let last = log.scans.get(3).unwrap();
+        assert_eq!(last.ranges[0], NO_RETURN, "beyond max_range");
+        assert!(last.ranges[1].is_nan(), "below min_range");
+        assert_eq!(last.ranges[2], 0.1);
+        assert_eq!(last.ranges[3], 3.000_000_3_f32);
+        assert_eq!(last.ranges[4], 7.99_f32);
+        let written = write(&log);
+        assert!(written.contains("\nwall,4,-1,4,3\n"), "{written}");
+        assert!(written.contains("\nmap,maps/arena.yaml\n"), "{written}");
+        assert!(
+            written.contains("\nbeam_sensor,7,0,0.05,1.5707963267948966,0.1,0.8,0,0,1\n"),
+            "{written}"
+        );
+        assert!(
+            written.contains("\nscan,0.1,0,1.5,max,-,2.25,max\n"),
+            "{written}"
+        );
+        assert!(
+            written.contains("\nscan,0.3,0,max,-,0.1,3.0000002,7.99\n"),
+            "{written}"
+        );
+        assert!(written.contains("\nnoise,sigma_beam,0.02\n"), "{written}");
+        assert_eq!(parse(&written, p()).unwrap(), log);
+        assert_eq!(write(&parse(&written, p()).unwrap()), written);
+    }
+
+    #[test]
+    fn malformed_version_4_lines_name_the_line_and_field() {
+        let sensor = "beam_sensor,0,0,0,0,0.1,4,0,0.1,3\n";
+        let with = |line: &str| message(&format!("{sensor}{line}"));
+        assert_eq!(
+            with("scan,1,0,1,2\n"),
+            "log.csv:2: field \"range\" (column 6): 2 ranges, beam sensor 0 has 3 beams"
+        );
+        assert_eq!(
+            with("scan,1,0,1,2,3,4,5\n"),
+            "log.csv:2: field \"range\" (column 7): 5 ranges, beam sensor 0 has 3 beams"
+        );
+        assert_eq!(
+            with("scan,1,0,1,-2,3\n"),
+            "log.csv:2: field \"range\" (column 5): -2 is out of range: >= 0, max or -"
+        );
+        assert_eq!(
+            with("scan,1,0,1,inf,3\n"),
+            "log.csv:2: field \"range\" (column 5): \"inf\" is not finite"
+        );
+        assert_eq!(
+            with("scan,1,0,1,,3\n"),
+            "log.csv:2: field \"range\" (column 5): \"\" is not a number"
+        );
+        assert_eq!(
+            with("scan,1,3,1,2,3\n"),
+            "log.csv:2: field \"id\" (column 3): 3 is out of range: \
+             the id of a beam_sensor line above this one"
+        );
+        assert_eq!(
+            message("scan,1,0,1,2,3\nbeam_sensor,0,0,0,0,0.1,4,0,0.1,3\n"),
+            "log.csv:1: field \"id\" (column 3): 0 is out of range: \
+             the id of a beam_sensor line above this one"
+        );
+        assert!(
+            with("scan,2,0,1,2,3\nscan,1,0,1,2,3\n")
+                .starts_with("log.csv:3: time 1 s is earlier than the previous record's 2 s"),
+        );
+        assert_eq!(
+            with("beam_sensor,0,0,0,0,0,1,0,0,1\n"),
+            "log.csv:2: beam sensor id 0 already appeared on line 1"
+        );
+        for (line, field, column, why) in [
+            (
+                "beam_sensor,0,11,0,0,0,1,0,0,1",
+                "x",
+                3,
+                "11 is out of range: within +-10 m of the robot's centre",
+            ),
+            (
+                "beam_sensor,0,0,0,7,0,1,0,0,1",
+                "yaw",
+                5,
+                "7 is out of range: within one turn, +-2 pi rad",
+            ),
+            (
+                "beam_sensor,0,0,0,0,-1,1,0,0,1",
+                "min_range",
+                6,
+                "-1 is out of range: >= 0 and < 1e5 m",
+            ),
+            (
+                "beam_sensor,0,0,0,0,2,1,0,0,1",
+                "max_range",
+                7,
+                "1 is out of range: > min_range and <= 1e5 m",
+            ),
+            (
+                "beam_sensor,0,0,0,0,0,1e6,0,0,1",
+                "max_range",
+                7,
+                "1000000 is out of range: > min_range and <= 1e5 m",
+            ),
+            (
+                "beam_sensor,0,0,0,0,0,1,0,0,0",
+                "count",
+                10,
+                "0 is out of range: 1 to 100000 beams",
+            ),
+            (
+                "beam_sensor,0,0,0,0,0,1,0,0,100001",
+                "count",
+                10,
+                "100001 is out of range: 1 to 100000 beams",
+            ),
+            (
+                "beam_sensor,0,0,0,0,0,1,0,0,-3",
+                "count",
+                10,
+                "\"-3\" is not a non-negative integer",
+            ),
+            (
+                "beam_sensor,0,0,0,0,0,1,0,0.1,100",
+                "angle_step",
+                10,
+                "0.1 is out of range: beams within one turn: |angle_step| (count - 1) <= 2 pi rad",
+            ),
+            (
+                "wall,0,0,1e6,0",
+                "x2",
+                4,
+                "1000000 is out of range: within +-1e5 m",
+            ),
+            (
+                "wall,1,2,1,2",
+                "y2",
+                5,
+                "2 is out of range: a second end apart from the first (a wall of non-zero length)",
+            ),
+            ("map,", "path", 2, "\"\" is out of range: a non-empty path"),
+            ("noise,sigma_beam,0", "value", 3, "0 is out of range: > 0"),
+        ] {
+            assert_eq!(
+                message(&format!("{line}\n")),
+                format!("log.csv:1: field \"{field}\" (column {column}): {why}"),
+                "{line}"
+            );
+        }
+        assert_eq!(
+            message("map,a.yaml\nmap,b.yaml\n"),
+            "log.csv:2: map line already appeared on line 1"
+        );
+        assert_eq!(
+            message("map,a,b.yaml\n"),
+            "log.csv:1: 3 fields, the format has 2"
+        );
+        assert_eq!(
+            message("wall,0,0,1,1,2\n"),
+            "log.csv:1: 6 fields, the format has 5"
+        );
+        assert_eq!(
+            message("beam_sensor,0,0,0,0,0,1,0,0,1,9\n"),
+            "log.csv:1: 11 fields, the format has 10"
+        );
+    }
+
+    #[test]
+    fn a_lidar_scan_of_1081_beams_reads_within_the_line_bound() {
+        let mut text = String::from(
+            "beam_sensor,3,0,0,0,0.02,30,-2.356194490192345,0.004363323129985824,1081\nscan,5",
+        );
+        text.push_str(",3");
+        for k in 0..1081 {
+            text.push_str(if k % 100 == 0 { ",max" } else { ",12.345678" });
+        }
+        text.push('\n');
+        let log = parse(&text, p()).unwrap();
+        assert_eq!(log.scans.ranges_len(), 1081);
+        assert!(text.len() < crate::MAX_LINE);
+        assert_eq!(parse(&write(&log), p()).unwrap(), log);
     }
 
     #[test]

@@ -14,15 +14,30 @@ pub struct NoiseRecords {
     pub sigma_range: Option<f64>,
     /// Standard deviation of a measured bearing, rad.
     pub sigma_bearing: Option<f64>,
+    /// Standard deviation of a beam sensor's range (`scan` records), m
+    /// (version 4).
+    pub sigma_beam: Option<f64>,
 }
 
 impl NoiseRecords {
-    /// The names of the noise levels, as written in a `noise` record, in the
-    /// order [`NoiseRecords::iter`] yields them.
+    /// The names of the levels of odometry and landmark sightings, as
+    /// written in a `noise` record: the levels a replay of landmark
+    /// sightings settles.
     pub const NAMES: [&'static str; 4] = ["q_v", "q_omega", "sigma_range", "sigma_bearing"];
 
-    /// The level named `name` (one of [`NoiseRecords::NAMES`]), `None` for
-    /// any other name.
+    /// The names of every level, as written in a `noise` record, in the
+    /// order [`NoiseRecords::iter`] yields them: [`NoiseRecords::NAMES`],
+    /// then the beam sensors' `sigma_beam` (version 4).
+    pub const ALL_NAMES: [&'static str; 5] = [
+        "q_v",
+        "q_omega",
+        "sigma_range",
+        "sigma_bearing",
+        "sigma_beam",
+    ];
+
+    /// The level named `name` (one of [`NoiseRecords::ALL_NAMES`]), `None`
+    /// for any other name.
     #[must_use]
     pub fn get(&self, name: &str) -> Option<Option<f64>> {
         Some(match name {
@@ -30,26 +45,28 @@ impl NoiseRecords {
             "q_omega" => self.q_omega,
             "sigma_range" => self.sigma_range,
             "sigma_bearing" => self.sigma_bearing,
+            "sigma_beam" => self.sigma_beam,
             _ => return None,
         })
     }
 
-    /// The slot of the level named `name` (one of [`NoiseRecords::NAMES`]),
-    /// `None` for any other name.
+    /// The slot of the level named `name` (one of
+    /// [`NoiseRecords::ALL_NAMES`]), `None` for any other name.
     pub fn get_mut(&mut self, name: &str) -> Option<&mut Option<f64>> {
         match name {
             "q_v" => Some(&mut self.q_v),
             "q_omega" => Some(&mut self.q_omega),
             "sigma_range" => Some(&mut self.sigma_range),
             "sigma_bearing" => Some(&mut self.sigma_bearing),
+            "sigma_beam" => Some(&mut self.sigma_beam),
             _ => None,
         }
     }
 
     /// The levels that are given, as `(name, value)`, in the order of
-    /// [`NoiseRecords::NAMES`].
+    /// [`NoiseRecords::ALL_NAMES`].
     pub fn iter(&self) -> impl Iterator<Item = (&'static str, f64)> + '_ {
-        Self::NAMES
+        Self::ALL_NAMES
             .into_iter()
             .filter_map(|name| Some((name, self.get(name).flatten()?)))
     }
@@ -69,7 +86,7 @@ mod tests {
     fn names_reach_their_own_fields() {
         let mut n = NoiseRecords::default();
         assert!(n.is_empty());
-        for (i, name) in NoiseRecords::NAMES.into_iter().enumerate() {
+        for (i, name) in NoiseRecords::ALL_NAMES.into_iter().enumerate() {
             *n.get_mut(name).unwrap() = Some(f64::from(u8::try_from(i).unwrap()) + 0.5);
         }
         assert_eq!(
@@ -79,6 +96,7 @@ mod tests {
                 q_omega: Some(1.5),
                 sigma_range: Some(2.5),
                 sigma_bearing: Some(3.5),
+                sigma_beam: Some(4.5),
             }
         );
         let listed: Vec<_> = n.iter().collect();
@@ -88,7 +106,8 @@ mod tests {
                 ("q_v", 0.5),
                 ("q_omega", 1.5),
                 ("sigma_range", 2.5),
-                ("sigma_bearing", 3.5)
+                ("sigma_bearing", 3.5),
+                ("sigma_beam", 4.5)
             ]
         );
         assert_eq!(n.get("q"), None);
@@ -96,7 +115,8 @@ mod tests {
         n.q_omega = None;
         assert_eq!(
             n.iter().map(|(k, _)| k).collect::<Vec<_>>(),
-            ["q_v", "sigma_range", "sigma_bearing"]
+            ["q_v", "sigma_range", "sigma_bearing", "sigma_beam"]
         );
+        assert_eq!(NoiseRecords::ALL_NAMES[..4], NoiseRecords::NAMES);
     }
 }

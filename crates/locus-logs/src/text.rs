@@ -82,8 +82,12 @@ fn special_kind(_: &fs::FileType) -> &'static str {
     "is not a regular file"
 }
 
+/// The magic bytes that start a gzip stream.
+const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
+
 /// The text of a file, decompressed if it is an xz stream (by its `.xz`
-/// extension or its magic bytes), read in chunks with every line bounded
+/// extension or its magic bytes) or a gzip stream (by its `.gz` extension
+/// or its magic bytes), read in chunks with every line bounded
 /// by [`MAX_LINE`](crate::MAX_LINE): a file holding one huge line is
 /// refused as soon as the line passes the bound, before it fills the
 /// memory.
@@ -96,17 +100,26 @@ pub(crate) fn read_text(path: &Path) -> Result<String> {
     let mut head = [0u8; XZ_MAGIC.len()];
     let n = read_up_to(&mut file, &mut head).map_err(io)?;
     let is_xz = path.extension().is_some_and(|e| e == "xz") || head[..n] == XZ_MAGIC;
+    let is_gz = path.extension().is_some_and(|e| e == "gz") || head[..n].starts_with(&GZIP_MAGIC);
     let size = file.metadata().map_or(0, |m| m.len());
     let head = std::io::Cursor::new(head[..n].to_vec());
-    let bytes = if is_xz {
+    let decompress = |source| Error::Decompress {
+        path: path.to_path_buf(),
+        source,
+    };
+    let bytes = if is_gz && !is_xz {
+        let input = std::io::BufReader::new(head.chain(file));
+        let mut decoder = flate2::bufread::MultiGzDecoder::new(input);
+        bounded(&mut decoder, path, size.saturating_mul(8)).map_err(|e| match e {
+            Bounded::Line(e) => e,
+            Bounded::Io(source) => decompress(source),
+        })?
+    } else if is_xz {
         let input = std::io::BufReader::new(head.chain(file));
         let mut decoder = xz::decoder(input);
         bounded(&mut decoder, path, size.saturating_mul(8)).map_err(|e| match e {
             Bounded::Line(e) => e,
-            Bounded::Io(source) => Error::Decompress {
-                path: path.to_path_buf(),
-                source,
-            },
+            Bounded::Io(source) => decompress(source),
         })?
     } else {
         bounded(&mut head.chain(file), path, size).map_err(|e| match e {
@@ -331,7 +344,7 @@ impl<'a> Fields<'a> {
 
     /// The next field as a finite number for which `ok` holds; else an
     /// out-of-range error quoting `expected`.
-    fn bounded(
+    pub(crate) fn bounded(
         &mut self,
         field: &'static str,
         ok: impl Fn(f64) -> bool,
@@ -356,6 +369,18 @@ impl<'a> Fields<'a> {
         let text = self.next_text(field)?;
         text.parse::<u32>()
             .map_err(|_| self.field_error(field, FieldProblem::NotAnInteger(excerpt(text))))
+    }
+
+    /// The next field as text, or `None` if the line ends before it (the
+    /// column moves on either way).
+    pub(crate) fn optional_text(&mut self) -> Option<&'a str> {
+        self.column += 1;
+        self.it.next()
+    }
+
+    /// The number of fields left on the line (consumed).
+    pub(crate) fn count_rest(&mut self) -> usize {
+        self.it.by_ref().count()
     }
 
     /// Checks that no field is left (the format has `columns` columns).
@@ -441,6 +466,21 @@ mod tests {
                 "{e}"
             );
         }
+        let gz = |data: &[u8]| {
+            let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+            std::io::Write::write_all(&mut e, data).unwrap();
+            e.finish().unwrap()
+        };
+        assert_eq!(read("ok.log.gz", &gz(&ok)).unwrap().len(), ok.len());
+        assert_eq!(
+            read("ok.log", &gz(b"a\n")).unwrap(),
+            "a\n",
+            "by its magic bytes"
+        );
+        let e = read("long.log.gz", &gz(&long)).unwrap_err();
+        assert!(matches!(e, Error::LineTooLong { line: 3, .. }), "{e}");
+        let e = read("bad.gz", b"\x1f\x8b not gzip").unwrap_err();
+        assert!(matches!(e, Error::Decompress { .. }), "{e}");
         // A last line with no newline is bounded too.
         let e = read("tail.csv", &vec![b'x'; 3 * MAX_LINE]).unwrap_err();
         assert!(matches!(e, Error::LineTooLong { line: 1, .. }), "{e}");

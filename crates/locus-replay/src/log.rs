@@ -462,6 +462,7 @@ impl Log {
                 })
                 .collect(),
             truth: self.truth.clone(),
+            ..LocusLog::default()
         }
     }
 

@@ -319,5 +319,6 @@ fn given_or_recorded(given: &NoiseRecords, recorded: &NoiseRecords) -> NoiseReco
         q_omega: given.q_omega.or(recorded.q_omega),
         sigma_range: given.sigma_range.or(recorded.sigma_range),
         sigma_bearing: given.sigma_bearing.or(recorded.sigma_bearing),
+        sigma_beam: given.sigma_beam.or(recorded.sigma_beam),
     }
 }

@@ -180,6 +180,7 @@ fn run_member(member: &Member, seed: u64, estimate: Estimate, out: Option<&Path>
                     q_omega: Some(truth.q_omega),
                     sigma_range: Some(truth.sigma_range),
                     sigma_bearing: Some(sigma_bearing),
+                    sigma_beam: None,
                 },
                 odometry_delay: Some(truth.odometry_delay),
                 estimation: Estimation::Nothing,

@@ -120,10 +120,10 @@ fn the_uwb_log_replays_position_only_and_every_range_is_accounted_for() {
     // The 3-sigma share of the heading reads n/a.
     assert!(stdout.contains(" / n/a "), "{stdout}");
 
-    // The export is a v3 log of range lines and truth without heading,
+    // The export is a v4 log of range lines and truth without heading,
     // and replays to the same figures.
     let csv = fs::read_to_string(&export).unwrap();
-    assert!(csv.starts_with("# Locus log v3"), "{csv}");
+    assert!(csv.starts_with("# Locus log v4"), "{csv}");
     assert_eq!(
         csv.lines().filter(|l| l.starts_with("range,")).count(),
         ranges

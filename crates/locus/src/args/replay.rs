@@ -191,6 +191,7 @@ impl Flags {
                 q_omega: self.q_omega,
                 sigma_range: self.sigma_range,
                 sigma_bearing: self.sigma_bearing,
+                sigma_beam: None,
             },
             odometry_delay: self.odometry_delay,
             estimation: if self.no_estimate {
