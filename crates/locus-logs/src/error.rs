@@ -145,11 +145,13 @@ pub enum Error {
         /// The file looked for (without `.xz`).
         path: PathBuf,
     },
-    /// The file is not a valid xz (or gzip) stream.
-    #[error("{}: {} decompression failed", path.display(), if path.extension().is_some_and(|e| e == "gz") { "gzip" } else { "xz" })]
+    /// The file is not a valid xz or gzip stream.
+    #[error("{}: {format} decompression failed", path.display())]
     Decompress {
         /// The file.
         path: PathBuf,
+        /// The compression: "xz" or "gzip".
+        format: &'static str,
         /// The decoder's error (corrupt data, failed integrity check,
         /// truncated stream).
         #[source]

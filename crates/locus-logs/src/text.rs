@@ -103,8 +103,9 @@ pub(crate) fn read_text(path: &Path) -> Result<String> {
     let is_gz = path.extension().is_some_and(|e| e == "gz") || head[..n].starts_with(&GZIP_MAGIC);
     let size = file.metadata().map_or(0, |m| m.len());
     let head = std::io::Cursor::new(head[..n].to_vec());
-    let decompress = |source| Error::Decompress {
+    let decompress = |format, source| Error::Decompress {
         path: path.to_path_buf(),
+        format,
         source,
     };
     let bytes = if is_gz && !is_xz {
@@ -112,14 +113,14 @@ pub(crate) fn read_text(path: &Path) -> Result<String> {
         let mut decoder = flate2::bufread::MultiGzDecoder::new(input);
         bounded(&mut decoder, path, size.saturating_mul(8)).map_err(|e| match e {
             Bounded::Line(e) => e,
-            Bounded::Io(source) => decompress(source),
+            Bounded::Io(source) => decompress("gzip", source),
         })?
     } else if is_xz {
         let input = std::io::BufReader::new(head.chain(file));
         let mut decoder = xz::decoder(input);
         bounded(&mut decoder, path, size.saturating_mul(8)).map_err(|e| match e {
             Bounded::Line(e) => e,
-            Bounded::Io(source) => decompress(source),
+            Bounded::Io(source) => decompress("xz", source),
         })?
     } else {
         bounded(&mut head.chain(file), path, size).map_err(|e| match e {
@@ -479,8 +480,13 @@ mod tests {
         );
         let e = read("long.log.gz", &gz(&long)).unwrap_err();
         assert!(matches!(e, Error::LineTooLong { line: 3, .. }), "{e}");
-        let e = read("bad.gz", b"\x1f\x8b not gzip").unwrap_err();
+        let e = read("bad.log", b"\x1f\x8b not gzip").unwrap_err();
         assert!(matches!(e, Error::Decompress { .. }), "{e}");
+        assert!(
+            e.to_string()
+                .ends_with("bad.log: gzip decompression failed"),
+            "{e}"
+        );
         // A last line with no newline is bounded too.
         let e = read("tail.csv", &vec![b'x'; 3 * MAX_LINE]).unwrap_err();
         assert!(matches!(e, Error::LineTooLong { line: 1, .. }), "{e}");
