@@ -60,11 +60,44 @@ pub struct Config {
     pub max_range: f64,
     /// Where the initial pose comes from.
     pub start: Start,
+    /// How the beams of range sensors are corrected.
+    pub beams: Beams,
     /// What an odometry record may say (top speed and turn rate, longest
     /// gap between records; `locus_models::plausible`): a record beyond
     /// them is refused (counted, named by its line, the velocities before
     /// it held). Default [`Limits::GENERIC`].
     pub limits: Limits,
+}
+
+/// How a scan's beams are corrected (papers 000/003: each beam one scalar
+/// update against the range cast in the map, one after the other).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Beams {
+    /// Standard deviation of a beam's range, m (> 0).
+    pub sigma: f64,
+    /// Beams a scan spends at most, spread evenly over its beams (>= 1):
+    /// neighbouring beams see the same surface with errors alike, so each
+    /// beam beyond a few tens adds little information for its time.
+    pub per_scan: u32,
+    /// Largest incidence on the surface a beam is used at, rad in
+    /// `(0, pi/2)`: a grazing beam's range changes too fast with the
+    /// heading to linearise.
+    pub max_incidence: f64,
+    /// A reading shorter than the range cast in the map by more than this
+    /// many standard deviations of the innovation is taken for something
+    /// not in the map (a person, a chair) and skipped (> 0).
+    pub short_sigma: f64,
+}
+
+impl Default for Beams {
+    fn default() -> Self {
+        Self {
+            sigma: 0.05,
+            per_scan: 30,
+            max_incidence: 1.2,
+            short_sigma: 3.0,
+        }
+    }
 }
 
 /// Where a replay's initial pose comes from.
@@ -151,6 +184,7 @@ impl Default for Config {
             max_range: 1000.0,
             limits: Limits::GENERIC,
             start: Start::Log,
+            beams: Beams::default(),
         }
     }
 }
@@ -244,6 +278,20 @@ impl Config {
             (
                 self.sigma_bearing <= core::f64::consts::PI,
                 "sigma_bearing must be at most pi rad",
+            ),
+            (
+                positive(self.beams.sigma) && self.beams.sigma <= 1e5,
+                "the beams' sigma must be finite, > 0 and at most 1e5 m",
+            ),
+            (self.beams.per_scan >= 1, "beams per scan must be >= 1"),
+            (
+                self.beams.max_incidence > 0.0
+                    && self.beams.max_incidence < core::f64::consts::FRAC_PI_2,
+                "the beams' max incidence must be in (0, pi/2) rad",
+            ),
+            (
+                positive(self.beams.short_sigma),
+                "the beams' short-reading bound must be finite and > 0",
             ),
         ];
         if let Err(what) = self.limits.validate() {

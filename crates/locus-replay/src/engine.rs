@@ -20,13 +20,15 @@ use locus_eval::Tally;
 use locus_logs::mrclam::{Odometry, TruthCursor};
 use locus_models::calibrated_unicycle::{BEARING_BIAS, OMEGA_BIAS, OMEGA_SCALE, V_SCALE};
 
-use crate::event::{Entry, Event};
+use crate::event::{Entry, Event, ScanRef};
 use crate::filter::{
     Carried, Filter, HISTORY, State, StateMatrix, StateVector, apply, calibration_of, pose_belief,
 };
 use crate::refusals::refusals_before;
 use crate::start::{initial_pose, start_disagreement};
-use crate::{Config, Error, EventKind, Log, Refusal, Report, SightingOutcome, Step, smoother};
+use crate::{
+    Config, Error, EventKind, Log, Refusal, Report, ScanOutcome, SightingOutcome, Step, smoother,
+};
 
 /// The replay engine: the running filter and what the report needs.
 pub(crate) struct Engine<'a> {
@@ -49,6 +51,8 @@ pub(crate) struct Engine<'a> {
     odometry: usize,
     /// The next sighting to take, an index into [`Log::sightings`].
     sightings: usize,
+    /// The next scan to take, an index into [`Log::scans`].
+    scans: usize,
 }
 
 /// The forward pass's state between two records of the log: all that
@@ -65,6 +69,7 @@ pub(crate) struct Checkpoint<'a> {
     truth: TruthCursor<'a>,
     odometry: usize,
     sightings: usize,
+    scans: usize,
 }
 
 impl<'a> Engine<'a> {
@@ -149,7 +154,7 @@ impl<'a> Engine<'a> {
             },
         );
         // With the smoother: one segment, and what one record can make final.
-        let events = log.odometry.len() + log.sightings.len();
+        let events = log.odometry.len() + log.sightings.len() + log.scans.len();
         let hold = if cfg.smooth {
             segment.min(events).saturating_add(HISTORY)
         } else {
@@ -186,6 +191,8 @@ impl<'a> Engine<'a> {
                 unknown_sightings: log.unknown_sightings,
                 late: 0,
                 too_late: 0,
+                scans: 0,
+                beams: ScanOutcome::default(),
                 innovation_nll: 0.0,
                 final_belief: pose_belief(&belief),
                 calibration: calibration_of(&belief),
@@ -201,6 +208,7 @@ impl<'a> Engine<'a> {
             compared_after_start: 0,
             odometry: 0,
             sightings: 0,
+            scans: 0,
         })
     }
 
@@ -214,6 +222,7 @@ impl<'a> Engine<'a> {
             truth: self.truth.clone(),
             odometry: self.odometry,
             sightings: self.sightings,
+            scans: self.scans,
         }
     }
 
@@ -230,6 +239,7 @@ impl<'a> Engine<'a> {
         self.truth = c.truth.clone();
         self.odometry = c.odometry;
         self.sightings = c.sightings;
+        self.scans = c.scans;
         self.held.clear();
         self.nodes.clear();
         Ok(())
@@ -245,8 +255,17 @@ impl<'a> Engine<'a> {
             log.odometry.get(self.odometry),
             log.sightings.get(self.sightings),
         );
-        let take_odometry = match (odometry, sighting) {
-            (Some(o), Some(s)) => o.time + cfg.odometry_delay <= s.arrival,
+        let scan_time = log.scans.times().get(self.scans).copied();
+        // Measurements arrive in order of arrival, sightings before scans
+        // at one time; odometry goes first up to that time.
+        let measurement = match (sighting, scan_time) {
+            (Some(s), Some(t)) => Some((s.arrival.min(t), s.arrival <= t)),
+            (Some(s), None) => Some((s.arrival, true)),
+            (None, Some(t)) => Some((t, false)),
+            (None, None) => None,
+        };
+        let take_odometry = match (odometry, measurement) {
+            (Some(o), Some((arrival, _))) => o.time + cfg.odometry_delay <= arrival,
             (Some(_), None) => true,
             (None, Some(_)) => false,
             (None, None) => {
@@ -254,6 +273,25 @@ impl<'a> Engine<'a> {
                 return Ok(false);
             }
         };
+        if !take_odometry
+            && let (Some(t), Some((_, false))) = (scan_time, measurement)
+        {
+            let index = self.scans;
+            self.scans += 1;
+            self.finalise_before(t - cfg.horizon);
+            if t <= self.filter.base().time {
+                self.report.too_late += 1;
+                return Ok(true);
+            }
+            let sensor = log.scans.get(index).map_or(0, |s| s.sensor);
+            let scan = ScanRef {
+                index,
+                time: t,
+                sensor,
+            };
+            self.insert(Event::Scan(scan, log.lines.scans.get(index).copied()))?;
+            return Ok(true);
+        }
         if take_odometry {
             if let Some(o) = odometry {
                 let i = self.odometry;
@@ -294,6 +332,7 @@ impl<'a> Engine<'a> {
         let entry = Entry {
             event,
             outcome: None,
+            scan: ScanOutcome::default(),
             inflations: 0,
             nll: 0.0,
         };
@@ -308,9 +347,7 @@ impl<'a> Engine<'a> {
             Err(source) => {
                 return Err(Error::Filter {
                     time: event.time(),
-                    line: match event {
-                        Event::Odometry(_, line) | Event::Sighting(_, line) => line,
-                    },
+                    line: event.line(),
                     source: *source,
                 });
             }
@@ -361,6 +398,27 @@ impl<'a> Engine<'a> {
                 EventKind::Sighting {
                     sighting,
                     outcome,
+                    line,
+                }
+            }
+            Event::Scan(scan, line) => {
+                let o = e.scan;
+                let r = &mut self.report;
+                r.scans += 1;
+                let b = &mut r.beams;
+                b.beams += o.beams;
+                b.chosen += o.chosen;
+                b.no_return += o.no_return;
+                b.no_surface += o.no_surface;
+                b.short += o.short;
+                b.applied += o.applied;
+                b.down_weighted += o.down_weighted;
+                b.gated += o.gated;
+                b.unusable += o.unusable;
+                b.nis += o.nis;
+                EventKind::Scan {
+                    sensor: scan.sensor,
+                    outcome: o,
                     line,
                 }
             }

@@ -74,6 +74,16 @@ pub enum Error {
         /// Why.
         why: locus_models::plausible::Implausible,
     },
+    /// The log's map (its walls or its map file) cannot be used.
+    #[error("{file}:{}map: {reason}", line.map_or_else(String::new, |l| format!("{l}: ")))]
+    Map {
+        /// The log's name (its file's).
+        file: String,
+        /// The line of the `wall` or `map` record, if known.
+        line: Option<usize>,
+        /// Why (the map reader's error).
+        reason: String,
+    },
     /// The filter failed (non-finite input, ...).
     #[error("filter step at {time} s{}", line.map_or_else(String::new, |l| format!(" (line {l})")))]
     Filter {

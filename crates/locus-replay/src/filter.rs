@@ -23,11 +23,12 @@ use locus_core::{
 use locus_models::calibrated_range::CalibratedRange;
 use locus_models::calibrated_range_bearing::CalibratedRangeBearing;
 use locus_models::calibrated_unicycle::{BEARING_BIAS, OMEGA_BIAS, OMEGA_SCALE, V_SCALE};
+use locus_models::planar_beam::{BeamMount, PlanarBeam};
 use locus_models::range_bearing::RangeBearing;
 use locus_models::unicycle::{Unicycle, Velocities};
 
 use crate::event::{Entry, Event};
-use crate::{Config, Log, SightingOutcome, Unusable};
+use crate::{Config, Log, ScanOutcome, SightingOutcome, Unusable};
 
 /// Cap on one sighting's NIS in
 /// [`Report::innovation_nll`](crate::Report::innovation_nll): the 99.9 %
@@ -91,7 +92,12 @@ pub(crate) fn apply(
     }
     entry.inflations = 0;
     entry.nll = 0.0;
+    entry.scan = ScanOutcome::default();
     entry.outcome = match entry.event {
+        Event::Scan(scan, _) => {
+            scan_correct(cfg, log, rules, track, entry, scan.index)?;
+            None
+        }
         Event::Odometry(o, _) => {
             track.extra.v = o.v;
             track.extra.omega = o.omega;
@@ -143,6 +149,120 @@ pub(crate) fn apply(
             }
         }),
     };
+    Ok(())
+}
+
+/// Corrects `track` with scan `index` of the log, one chosen beam after
+/// the other (papers 000/003: each beam one scalar update): the beam cast
+/// in the log's map from the current estimate gives the surface it should
+/// see, [`PlanarBeam`] the range to it and its Jacobian. A beam with no
+/// return, no surface in range (or one met grazing), or a reading far
+/// shorter than the map's (something not in the map) is skipped; the rest
+/// are Student-t weighted and gated as sightings are, with no covariance
+/// inflation (one scan's many beams are not a run of rejections). The
+/// scan's innovation log-likelihood term is the sum of its beams'.
+fn scan_correct(
+    cfg: &Config,
+    log: &Log,
+    rules: &Rules<f64>,
+    track: &mut State,
+    entry: &mut Entry,
+    index: usize,
+) -> Result<(), locus_core::Error> {
+    use locus_logs::scans::Reading;
+    let (Some(scan), Some(map)) = (log.scans.get(index), log.map.as_deref()) else {
+        return Ok(());
+    };
+    let Some(sensor) = log.beam_sensors.iter().find(|b| b.id == scan.sensor) else {
+        return Ok(());
+    };
+    let beams = cfg.beams;
+    let rules = Rules {
+        recovery: None,
+        ..*rules
+    };
+    let robust = cfg.robust_dof.and_then(|dof| StudentT::new(dof).ok());
+    let count = scan.ranges.len();
+    let chosen = count.min(beams.per_scan as usize);
+    let out = &mut entry.scan;
+    out.beams = u32::try_from(count).unwrap_or(u32::MAX);
+    out.chosen = u32::try_from(chosen).unwrap_or(u32::MAX);
+    let mut nll = 0.0;
+    for j in 0..chosen {
+        // Spread evenly: the middle beam of each of `chosen` equal parts.
+        let k = (2 * j + 1) * count / (2 * chosen);
+        let z = match Reading::of(scan.ranges[k]) {
+            Reading::Range(r) => f64::from(r),
+            Reading::NoReturn | Reading::Missing => {
+                out.no_return += 1;
+                continue;
+            }
+        };
+        let x = &track.belief.x;
+        let (sin, cos) = x[2].sin_cos();
+        let m = sensor.mount;
+        let origin = [x[0] + cos * m.x - sin * m.y, x[1] + sin * m.x + cos * m.y];
+        let angle_on_robot = m.yaw + sensor.angle(u32::try_from(k).unwrap_or(u32::MAX));
+        let hit = map
+            .cast(origin, x[2] + angle_on_robot, sensor.max_range)
+            .filter(|h| h.incidence <= beams.max_incidence);
+        let Some(hit) = hit else {
+            out.no_surface += 1;
+            continue;
+        };
+        let model = PlanarBeam {
+            mount: BeamMount {
+                position: Vector2::new(m.x, m.y),
+                angle: angle_on_robot,
+            },
+            point: Vector2::new(hit.point[0], hit.point[1]),
+            normal: Vector2::new(hit.normal[0], hit.normal[1]),
+            var_range: beams.sigma * beams.sigma,
+            min_range: sensor.min_range,
+            max_incidence: beams.max_incidence,
+        };
+        let mut h = SMatrix::<f64, 1, STATE>::zeros();
+        let Some(predicted) = model.evaluate(x, Some(&mut h)) else {
+            out.no_surface += 1;
+            continue;
+        };
+        let s = (h * track.belief.p * h.transpose())[(0, 0)] + model.var_range;
+        if z - predicted[0] < -beams.short_sigma * s.sqrt() {
+            out.short += 1;
+            continue;
+        }
+        let zv = SVector::<f64, 1>::new(z);
+        let update = match robust {
+            Some(t) => track.correct_robust(&rules, &t, &model, &zv),
+            None => track.correct(&rules, &model, &zv),
+        };
+        let update = match update {
+            Ok(u) => u,
+            Err(e) if Unusable::of(e).is_some() => {
+                out.unusable += 1;
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
+        if let Some(first) = update.first_attempt() {
+            nll += 0.5 * first.s[(0, 0)].ln() + 0.5 * first.nis.min(NIS_CAP_RANGE);
+        }
+        match update {
+            Update::Applied {
+                correction, weight, ..
+            } => {
+                out.applied += 1;
+                out.down_weighted += u32::from(weight < 1.0);
+                out.nis += correction.nis;
+            }
+            Update::Gated { correction, .. } => {
+                out.gated += 1;
+                out.nis += correction.nis;
+            }
+            Update::NoMeasurement => out.no_surface += 1,
+        }
+    }
+    entry.nll = nll;
     Ok(())
 }
 

@@ -92,11 +92,11 @@ mod smoother;
 mod start;
 mod step;
 
-pub use config::{Calibration, Config, Start};
+pub use config::{Beams, Calibration, Config, Start};
 pub use error::Error;
 pub use filter::{NIS_CAP, NIS_CAP_RANGE, STATE, StateMatrix, StateVector};
 pub use log::{Landmark, Log, RefusedRecord, RefusedTime, Sighting, TIME_TOLERANCE, TimeProblem};
 pub use refusals::{Refusal, Refusals};
 pub use report::{Report, StartDisagreement, StartedFrom};
 pub use segments::{replay, replay_in_segments, smoothing_segment};
-pub use step::{EventKind, SightingOutcome, Step, Unusable};
+pub use step::{EventKind, ScanOutcome, SightingOutcome, Step, Unusable};

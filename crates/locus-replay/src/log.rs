@@ -1,14 +1,44 @@
 //! A recorded robot log in the form the replay consumes: the landmark map,
 //! odometry in time order, landmark sightings in the order they were
 //! received, optional ground truth and initial pose, the landmark sensor's
-//! mount and the noise levels the log declares. Built from an MRCLAM
-//! dataset ([`Log::mrclam`]) or a Locus CSV log ([`Log::locus_csv`]).
+//! mount and the noise levels the log declares; and for range sensors that
+//! see walls (version 4), the map of walls or grid, the beam sensors and
+//! their scans. Built from an MRCLAM dataset ([`Log::mrclam`]) or a Locus
+//! CSV log ([`Log::locus_csv`]).
 
 use std::path::Path;
+use std::sync::Arc;
 
 use locus_logs::locus_csv::{self, LocusLog};
 use locus_logs::mrclam::{Dataset, Groundtruth, Odometry, TruthPose};
-pub use locus_logs::{Landmark, Lines, NoiseRecords, SensorMount, Sighting};
+pub use locus_logs::{BeamSensor, Landmark, Lines, NoiseRecords, Scans, SensorMount, Sighting};
+pub use locus_logs::MapPath;
+pub use locus_map::Map;
+
+/// A map shared by the replays of one log (the estimate replays a log many
+/// times; a grid is loaded once). Two are equal when they are one map or
+/// hold the same walls or the same grid.
+#[derive(Debug, Clone)]
+pub struct SharedMap(pub Arc<Map>);
+
+impl PartialEq for SharedMap {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+            || match (&*self.0, &*other.0) {
+                (Map::Segments(a), Map::Segments(b)) => a.segments() == b.segments(),
+                (Map::Grid(a), Map::Grid(b)) => a == b,
+                _ => false,
+            }
+    }
+}
+
+impl core::ops::Deref for SharedMap {
+    type Target = Map;
+
+    fn deref(&self) -> &Map {
+        &self.0
+    }
+}
 use locus_models::plausible::{Implausible, Limits};
 
 use crate::Error;
@@ -56,6 +86,15 @@ pub struct Log {
     /// Sightings refused because their time stamp is implausible
     /// ([`TIME_TOLERANCE`]), left out of [`Log::sightings`].
     pub refused_times: Vec<RefusedTime>,
+    /// The map the beam sensors see (the log's walls, or its map file),
+    /// shared by the replays of one log; `None` without one.
+    pub map: Option<SharedMap>,
+    /// The map file the log names (`map` record), kept for export.
+    pub map_file: Option<MapPath>,
+    /// The range sensors whose beams are cast in [`Log::map`].
+    pub beam_sensors: Vec<BeamSensor>,
+    /// Their scans, in non-decreasing time order.
+    pub scans: Scans,
 }
 
 /// A record refused as implausible, with its line.
@@ -232,6 +271,10 @@ impl Log {
             refused_noise: Vec::new(),
             lines: Lines::default(),
             refused_times,
+            map: None,
+            map_file: None,
+            beam_sensors: Vec::new(),
+            scans: Scans::default(),
         })
     }
 
@@ -342,6 +385,18 @@ impl Log {
                 unknown += 1;
             }
         }
+        let map = if log.walls.is_empty() {
+            None
+        } else {
+            let walls = log.walls.iter().map(|w| [w.x1, w.y1, w.x2, w.y2].into()).collect();
+            let segments = locus_map::SegmentMap::new(walls).map_err(|e| Error::Map {
+                file: name.to_string(),
+                line: lines.walls.first().copied(),
+                reason: e.to_string(),
+            })?;
+            Some(SharedMap(Arc::new(Map::Segments(segments))))
+        };
+        let map_file = log.map.clone();
         Ok(Self {
             name: name.to_string(),
             landmarks: log
@@ -367,6 +422,10 @@ impl Log {
                 ..lines
             },
             refused_times,
+            map,
+            map_file,
+            beam_sensors: log.beam_sensors,
+            scans: log.scans,
         })
     }
 
@@ -407,11 +466,28 @@ impl Log {
     /// is), malformed line (file and line), an implausible record
     /// ([`Log::from_locus`]).
     pub fn locus_csv(path: &Path) -> Result<Self, Error> {
-        let (log, lines, _) = locus_csv::read_with_lines(path)?;
+        let (log, lines, file) = locus_csv::read_with_lines(path)?;
         let name = path
             .file_name()
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-        Self::from_locus_lines(&name, log, lines)
+        let map_file = log.map.as_ref().map(|m| m.resolve(&file));
+        let map_line = lines.map;
+        let map_error = |reason: String| Error::Map {
+            file: name.clone(),
+            line: map_line,
+            reason,
+        };
+        if map_file.is_some() && !log.walls.is_empty() {
+            return Err(map_error(
+                "the log gives both walls and a map file: give one".to_string(),
+            ));
+        }
+        let mut out = Self::from_locus_lines(&name, log, lines)?;
+        if let Some(p) = map_file {
+            let map = Map::load(&p).map_err(|e| map_error(e.to_string()))?;
+            out.map = Some(SharedMap(Arc::new(map)));
+        }
+        Ok(out)
     }
 
     /// Reads a log in libRSF's text format (`range2` and `odom2diff` lines:
@@ -462,7 +538,25 @@ impl Log {
                 })
                 .collect(),
             truth: self.truth.clone(),
-            ..LocusLog::default()
+            // Walls as given, or the map file's name (a grid is not
+            // written inline).
+            walls: match (&self.map, &self.map_file) {
+                (Some(m), None) => match &**m {
+                    Map::Segments(s) => s
+                        .segments()
+                        .iter()
+                        .map(|&seg| {
+                            let [x1, y1, x2, y2]: [f64; 4] = seg.into();
+                            locus_logs::Wall { x1, y1, x2, y2 }
+                        })
+                        .collect(),
+                    Map::Grid(_) => Vec::new(),
+                },
+                _ => Vec::new(),
+            },
+            map: self.map_file.clone(),
+            beam_sensors: self.beam_sensors.clone(),
+            scans: self.scans.clone(),
         }
     }
 

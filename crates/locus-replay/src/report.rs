@@ -65,6 +65,10 @@ pub struct Report {
     /// Sightings older than the history (or than the first odometry),
     /// not applied.
     pub too_late: usize,
+    /// Scans of beam sensors replayed.
+    pub scans: usize,
+    /// What their beams did, summed over the scans.
+    pub beams: crate::ScanOutcome,
     /// Negative log-likelihood of the innovations (natural log, without
     /// the constant `ln 2 pi` per sighting): the sum over the sightings
     /// that reached the filter of `(ln det S + min(NIS, NIS_CAP)) / 2`, `S`

@@ -26,7 +26,7 @@ use crate::{Config, Error, Log, Report, Step, smoother};
 /// An invalid configuration, a log with no odometry or no initial pose,
 /// sightings out of arrival order, a filter failure, a smoother failure.
 pub fn replay(log: &Log, cfg: &Config, sink: impl FnMut(&Step)) -> Result<Report, Error> {
-    let events = log.odometry.len() + log.sightings.len();
+    let events = log.odometry.len() + log.sightings.len() + log.scans.len();
     replay_in_segments(log, cfg, smoothing_segment(events), sink)
 }
 

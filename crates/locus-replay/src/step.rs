@@ -76,6 +76,45 @@ impl core::fmt::Display for Unusable {
     }
 }
 
+/// What happened to a scan's beams: how many the scan had, how many the
+/// replay spent on it ([`Beams::per_scan`](crate::Beams::per_scan)), and
+/// of those, what each did.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ScanOutcome {
+    /// Beams in the scan.
+    pub beams: u32,
+    /// Beams chosen (spread evenly over the scan).
+    pub chosen: u32,
+    /// Chosen beams with no return or no valid reading (skipped).
+    pub no_return: u32,
+    /// Chosen beams whose cast from the estimate meets nothing within
+    /// the sensor's range, or meets it grazing or from behind (skipped).
+    pub no_surface: u32,
+    /// Chosen beams that read far shorter than the map (something not in
+    /// the map: skipped).
+    pub short: u32,
+    /// Beams that corrected the belief.
+    pub applied: u32,
+    /// Of those, applied with a Student-t weight below 1.
+    pub down_weighted: u32,
+    /// Beams the gate rejected.
+    pub gated: u32,
+    /// Beams the filter could not use (refused, the belief unchanged).
+    pub unusable: u32,
+    /// Sum of the NIS of the beams that reached the gate (applied or
+    /// gated; chi-square with [`ScanOutcome::judged`] dof if the noise is
+    /// right).
+    pub nis: f64,
+}
+
+impl ScanOutcome {
+    /// Beams that reached the gate (applied or gated).
+    #[must_use]
+    pub fn judged(&self) -> u32 {
+        self.applied + self.gated
+    }
+}
+
 /// The kind of an event.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum EventKind {
@@ -92,6 +131,15 @@ pub enum EventKind {
         sighting: Sighting,
         /// What the filter did with it.
         outcome: SightingOutcome,
+        /// Its line in the log file, if known.
+        line: Option<usize>,
+    },
+    /// A scan of a beam sensor.
+    Scan {
+        /// The beam sensor's id.
+        sensor: u32,
+        /// What its beams did.
+        outcome: ScanOutcome,
         /// Its line in the log file, if known.
         line: Option<usize>,
     },
@@ -185,6 +233,21 @@ impl Step {
                 out.push(',');
                 out.push_str(applied);
             }
+            // A scan: the sensor in the landmark column, the NIS summed
+            // over the beams judged with their count as its dof, the
+            // beams applied.
+            EventKind::Scan {
+                sensor, outcome, ..
+            } => {
+                let _ = write!(out, ",scan,{sensor},,,");
+                if outcome.judged() > 0 {
+                    push_f64(out, outcome.nis);
+                    let _ = write!(out, ",{}", outcome.judged());
+                } else {
+                    out.push(',');
+                }
+                let _ = write!(out, ",{}", outcome.applied);
+            }
         }
         let x = &self.belief.x;
         let p = &self.belief.p;
@@ -276,6 +339,11 @@ impl Step {
                 | SightingOutcome::NoMeasurement
                 | SightingOutcome::Unusable(_) => (true, None),
             },
+            EventKind::Scan { outcome, .. } => (
+                true,
+                (outcome.judged() > 0)
+                    .then(|| (outcome.nis, outcome.judged(), outcome.applied > 0)),
+            ),
         }
     }
 

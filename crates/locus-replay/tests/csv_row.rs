@@ -44,6 +44,24 @@ fn reference_row(step: &Step) -> String {
                 applied.to_string(),
             )
         }
+        EventKind::Scan {
+            sensor, outcome, ..
+        } => {
+            let judged = outcome.applied + outcome.gated;
+            let nis = if judged > 0 {
+                format!("{},{judged}", outcome.nis)
+            } else {
+                ",".to_string()
+            };
+            (
+                "scan",
+                sensor.to_string(),
+                String::new(),
+                String::new(),
+                nis,
+                outcome.applied.to_string(),
+            )
+        }
     };
     let x = &step.belief.x;
     let p = &step.belief.p;

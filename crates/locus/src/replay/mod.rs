@@ -86,7 +86,7 @@ fn execute(log: &Log, settled: &Settled, flags: &Flags, out: &Path) -> Result<()
     // With --smooth, the smoothed trajectory goes to smoothed.csv
     // (prepare_run_dir removed an earlier run's).
     let smoothed_path = out.join("smoothed.csv");
-    let total = (log.odometry.len() + log.sightings.len()) as u64;
+    let total = (log.odometry.len() + log.sightings.len() + log.scans.len()) as u64;
     let bar = progress_bar(total, "{pos}/{len} events, {elapsed} elapsed")?;
     let mut samples: Vec<Sample> = Vec::new();
     let smoothed = cfg.smooth.then_some(smoothed_path.as_path());
