@@ -293,14 +293,21 @@ const UNKNOWN: u8 = 205;
 ///
 /// # Errors
 /// [`MapError::Io`] or [`MapError::Image`] if a file cannot be written;
-/// [`MapError::Invalid`] if `path` has no file name, or the thresholds leave
-/// no pixel value that reads back as each trinary state.
+/// [`MapError::Invalid`] if `path` has no file name or ends in `.pgm`, or
+/// the thresholds leave no pixel value that reads back as each trinary
+/// state.
 pub fn save(grid: &Grid, path: &Path, mode: Mode) -> Result<(), MapError> {
     let stem = path.file_stem().and_then(|s| s.to_str()).ok_or_else(|| {
         MapError::invalid("map path", format!("{}: no file name", path.display()))
     })?;
     let image_name = format!("{stem}.pgm");
     let image_path = path.with_file_name(&image_name);
+    if image_path == path {
+        return Err(MapError::invalid(
+            "map path",
+            format!("{}: the YAML would overwrite its own image", path.display()),
+        ));
+    }
     let g = grid.geometry();
     let th = grid.thresholds();
     let unknown = if mode == Mode::Raw {

@@ -146,6 +146,8 @@ fn written_maps_read_back() {
     assert_eq!(back.geometry(), grid.geometry());
     assert_eq!(back.thresholds(), grid.thresholds());
     assert_eq!(picture(&back), picture(&grid));
+    // A path that would make the YAML its own image is refused.
+    assert!(ros::save(&grid, &dir.join("map.pgm"), ros::Mode::Trinary).is_err());
 
     for (mode, tol) in [(ros::Mode::Scale, 0.5 / 255.0), (ros::Mode::Raw, 0.005)] {
         ros::save(&grid, &path, mode).unwrap();
