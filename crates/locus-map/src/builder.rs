@@ -132,8 +132,9 @@ impl GridBuilder {
     /// Adds one beam from `origin` (m, world) at `angle` (rad, world). A
     /// return: every cell the beam crosses before the one its end lies in
     /// gets a miss, that one a hit (if it is in the grid; a return beyond
-    /// the grid only clears). Range 0 is a hit in the origin's cell. A
-    /// negative or NaN range, or a non-finite origin or angle, is ignored.
+    /// the grid only clears). Range 0 is a hit in the origin's cell; an
+    /// infinite range clears to the grid's edge. A negative or NaN range, or
+    /// a non-finite origin or angle, is ignored.
     /// Allocates nothing.
     pub fn insert_beam(&mut self, origin: [f64; 2], angle: f64, reading: Reading) {
         let (limit, hit) = match reading {

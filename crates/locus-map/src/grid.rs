@@ -80,13 +80,28 @@ impl Thresholds {
 /// cell; free and unknown cells let rays pass. The surface normal at a hit is
 /// estimated from the occupied cells around it (see `normal.rs` and
 /// docs/maps.md).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Grid {
     geometry: GridGeometry,
     thresholds: Thresholds,
     /// Probability per cell (row-major, row 0 at the bottom), NaN: unknown.
     probability: Vec<f32>,
     state: Vec<Occupancy>,
+}
+
+impl PartialEq for Grid {
+    /// Same geometry, thresholds, states and probabilities (an unknown
+    /// probability equals an unknown one).
+    fn eq(&self, other: &Self) -> bool {
+        self.geometry == other.geometry
+            && self.thresholds == other.thresholds
+            && self.state == other.state
+            && self
+                .probability
+                .iter()
+                .zip(&other.probability)
+                .all(|(a, b)| a == b || (a.is_nan() && b.is_nan()))
+    }
 }
 
 impl Grid {

@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 
 use image::ImageDecoder as _;
 use image::codecs::pnm::{PnmDecoder, PnmEncoder, PnmSubtype, SampleEncoding};
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
 
 use crate::{Grid, GridGeometry, MapError, Occupancy, Thresholds};
 
@@ -85,17 +85,6 @@ struct RawYaml {
     free_thresh: f64,
     #[serde(default)]
     mode: Option<String>,
-}
-
-#[derive(Serialize)]
-struct OutYaml<'a> {
-    image: &'a str,
-    mode: &'a str,
-    resolution: f64,
-    origin: [f64; 3],
-    negate: u8,
-    occupied_thresh: f64,
-    free_thresh: f64,
 }
 
 /// Reads a ROS map: the YAML file at `path` and the image it names.
@@ -304,14 +293,21 @@ const UNKNOWN: u8 = 205;
 ///
 /// # Errors
 /// [`MapError::Io`] or [`MapError::Image`] if a file cannot be written;
-/// [`MapError::Invalid`] if `path` has no file name, or the thresholds leave
-/// no pixel value that reads back as each trinary state.
+/// [`MapError::Invalid`] if `path` has no file name or ends in `.pgm`, or
+/// the thresholds leave no pixel value that reads back as each trinary
+/// state.
 pub fn save(grid: &Grid, path: &Path, mode: Mode) -> Result<(), MapError> {
     let stem = path.file_stem().and_then(|s| s.to_str()).ok_or_else(|| {
         MapError::invalid("map path", format!("{}: no file name", path.display()))
     })?;
     let image_name = format!("{stem}.pgm");
     let image_path = path.with_file_name(&image_name);
+    if image_path == path {
+        return Err(MapError::invalid(
+            "map path",
+            format!("{}: the YAML would overwrite its own image", path.display()),
+        ));
+    }
     let g = grid.geometry();
     let th = grid.thresholds();
     let unknown = if mode == Mode::Raw {
@@ -350,20 +346,25 @@ pub fn save(grid: &Grid, path: &Path, mode: Mode) -> Result<(), MapError> {
         }
     }
     write_pgm(&image_path, w, h, &pixels)?;
-    let yaml = OutYaml {
-        image: &image_name,
-        mode: mode.name(),
-        resolution: g.resolution(),
-        origin: g.origin(),
-        negate: 0,
-        occupied_thresh: th.occupied,
-        free_thresh: th.free,
-    };
-    let text = yaml_serde::to_string(&yaml).map_err(|e| MapError::Syntax {
+    // map_saver's layout (origin as a flow list); the image name quoted as
+    // YAML needs it; numbers that read back bit for bit.
+    let name = yaml_serde::to_string(&image_name).map_err(|e| MapError::Syntax {
         file: path.into(),
         line: None,
         message: e.to_string(),
     })?;
+    let o = g.origin();
+    let text = format!(
+        "image: {}\nmode: {}\nresolution: {:?}\norigin: [{:?}, {:?}, {:?}]\nnegate: 0\noccupied_thresh: {:?}\nfree_thresh: {:?}\n",
+        name.trim_end(),
+        mode.name(),
+        g.resolution(),
+        o[0],
+        o[1],
+        o[2],
+        th.occupied,
+        th.free
+    );
     std::fs::write(path, text).map_err(|source| MapError::Io {
         file: path.into(),
         source,

@@ -84,7 +84,7 @@ pub fn format(segments: &[Segment]) -> String {
     s
 }
 
-/// Writes `segments` to `path` ([`format`]).
+/// Writes `segments` to `path` ([`format()`]).
 ///
 /// # Errors
 /// [`MapError::Io`].

@@ -93,7 +93,7 @@ pub fn format(segments: &[Segment]) -> String {
     s
 }
 
-/// Writes `segments` to `path` ([`format`]).
+/// Writes `segments` to `path` ([`format()`]).
 ///
 /// # Errors
 /// [`MapError::Io`].
