@@ -15,7 +15,8 @@
 //! - per data line: `odometry,t,v,0`, `scan,t,0,r` and `truth,t,x_true,0`
 //!   (truth of positions only: the robot's heading is 0 by construction on
 //!   the rail, but Vicon gave only x, so none is claimed);
-//! - no `start` (a replay's own rule picks the initial pose) and no `noise`
+//! - a `start` at the first truth position with heading 0 (the rail's
+//!   direction: known by construction, not measured), and no `noise`
 //!   records: the published `r_var` and `v_var` are returned beside the log
 //!   ([`Aer1513::r_var`], [`Aer1513::v_var`]), for a baseline that uses
 //!   them, but a replay is meant to estimate the noise from the log.
@@ -155,7 +156,11 @@ pub fn parse(text: &str, path: &Path) -> Result<Aer1513> {
             theta: 0.0,
         });
     }
+    // The rail is the x axis and the robot faces along it: its heading is
+    // 0 by construction, its first position the first truth's.
+    let start = truth.first().map(|t| TruthPose { theta: 0.0, ..*t });
     let log = LocusLog {
+        start,
         odometry,
         // Times were checked not to decrease.
         truth: Groundtruth::positions(truth).unwrap_or_default(),
@@ -204,7 +209,8 @@ mod tests {
             "beyond MAX_RANGE"
         );
         assert!(!d.log.truth.has_heading());
-        assert!(d.log.noise.is_empty() && d.log.start.is_none());
+        assert!(d.log.noise.is_empty());
+        assert_eq!(d.log.start.map(|s| s.theta), Some(0.0));
         let text = crate::locus_csv::write(&d.log);
         assert_eq!(crate::locus_csv::parse(&text, p()).unwrap(), d.log);
     }

@@ -273,13 +273,13 @@ impl<'a> Engine<'a> {
                 return Ok(false);
             }
         };
-        if !take_odometry
-            && let (Some(t), Some((_, false))) = (scan_time, measurement)
-        {
+        if !take_odometry && let (Some(t), Some((_, false))) = (scan_time, measurement) {
             let index = self.scans;
             self.scans += 1;
             self.finalise_before(t - cfg.horizon);
-            if t <= self.filter.base().time {
+            // A scan at the base's own time (the first odometry time) is
+            // applied on it; an older one is too late.
+            if t < self.filter.base().time {
                 self.report.too_late += 1;
                 return Ok(true);
             }
@@ -417,6 +417,7 @@ impl<'a> Engine<'a> {
                 b.unusable += o.unusable;
                 b.nis += o.nis;
                 EventKind::Scan {
+                    index: scan.index,
                     sensor: scan.sensor,
                     outcome: o,
                     line,

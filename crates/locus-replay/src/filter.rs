@@ -183,14 +183,11 @@ fn scan_correct(
     };
     let robust = cfg.robust_dof.and_then(|dof| StudentT::new(dof).ok());
     let count = scan.ranges.len();
-    let chosen = count.min(beams.per_scan as usize);
     let out = &mut entry.scan;
     out.beams = u32::try_from(count).unwrap_or(u32::MAX);
-    out.chosen = u32::try_from(chosen).unwrap_or(u32::MAX);
+    out.chosen = u32::try_from(count.min(beams.per_scan as usize)).unwrap_or(u32::MAX);
     let mut nll = 0.0;
-    for j in 0..chosen {
-        // Spread evenly: the middle beam of each of `chosen` equal parts.
-        let k = (2 * j + 1) * count / (2 * chosen);
+    for k in chosen_beams(count, beams.per_scan) {
         let z = match Reading::of(scan.ranges[k]) {
             Reading::Range(r) => f64::from(r),
             Reading::NoReturn | Reading::Missing => {
@@ -199,27 +196,9 @@ fn scan_correct(
             }
         };
         let x = &track.belief.x;
-        let (sin, cos) = x[2].sin_cos();
-        let m = sensor.mount;
-        let origin = [x[0] + cos * m.x - sin * m.y, x[1] + sin * m.x + cos * m.y];
-        let angle_on_robot = m.yaw + sensor.angle(u32::try_from(k).unwrap_or(u32::MAX));
-        let hit = map
-            .cast(origin, x[2] + angle_on_robot, sensor.max_range)
-            .filter(|h| h.incidence <= beams.max_incidence);
-        let Some(hit) = hit else {
+        let Some(model) = beam_model(map, sensor, k, x, &beams) else {
             out.no_surface += 1;
             continue;
-        };
-        let model = PlanarBeam {
-            mount: BeamMount {
-                position: Vector2::new(m.x, m.y),
-                angle: angle_on_robot,
-            },
-            point: Vector2::new(hit.point[0], hit.point[1]),
-            normal: Vector2::new(hit.normal[0], hit.normal[1]),
-            var_range: beams.sigma * beams.sigma,
-            min_range: sensor.min_range,
-            max_incidence: beams.max_incidence,
         };
         let mut h = SMatrix::<f64, 1, STATE>::zeros();
         let Some(predicted) = model.evaluate(x, Some(&mut h)) else {
@@ -264,6 +243,44 @@ fn scan_correct(
     }
     entry.nll = nll;
     Ok(())
+}
+
+/// The beams of a scan of `count` beams that a replay spends, `per_scan`
+/// at most: the middle beam of each of that many equal parts.
+pub(crate) fn chosen_beams(count: usize, per_scan: u32) -> impl Iterator<Item = usize> {
+    let chosen = count.min(per_scan as usize);
+    (0..chosen).map(move |j| (2 * j + 1) * count / (2 * chosen))
+}
+
+/// Beam `k` of `sensor` at the state `x`: cast in `map` from the sensor,
+/// the surface it meets (within the sensor's range, at an incidence of at
+/// most `beams.max_incidence`) as a [`PlanarBeam`]; `None` where it meets
+/// none.
+pub(crate) fn beam_model(
+    map: &locus_map::Map,
+    sensor: &locus_logs::BeamSensor,
+    k: usize,
+    x: &StateVector,
+    beams: &crate::Beams,
+) -> Option<PlanarBeam<f64>> {
+    let (sin, cos) = x[2].sin_cos();
+    let m = sensor.mount;
+    let origin = [x[0] + cos * m.x - sin * m.y, x[1] + sin * m.x + cos * m.y];
+    let angle_on_robot = m.yaw + sensor.angle(u32::try_from(k).unwrap_or(u32::MAX));
+    let hit = map
+        .cast(origin, x[2] + angle_on_robot, sensor.max_range)
+        .filter(|h| h.incidence <= beams.max_incidence)?;
+    Some(PlanarBeam {
+        mount: BeamMount {
+            position: Vector2::new(m.x, m.y),
+            angle: angle_on_robot,
+        },
+        point: Vector2::new(hit.point[0], hit.point[1]),
+        normal: Vector2::new(hit.normal[0], hit.normal[1]),
+        var_range: beams.sigma * beams.sigma,
+        min_range: sensor.min_range,
+        max_incidence: beams.max_incidence,
+    })
 }
 
 /// Corrects `track` with one sighting `z` of `M` components (range and

@@ -7,12 +7,12 @@
 //! CSV log ([`Log::locus_csv`]).
 
 use std::path::Path;
-use std::sync::Arc;
+use alloc::sync::Arc;
 
+pub use locus_logs::MapPath;
 use locus_logs::locus_csv::{self, LocusLog};
 use locus_logs::mrclam::{Dataset, Groundtruth, Odometry, TruthPose};
 pub use locus_logs::{BeamSensor, Landmark, Lines, NoiseRecords, Scans, SensorMount, Sighting};
-pub use locus_logs::MapPath;
 pub use locus_map::Map;
 
 /// A map shared by the replays of one log (the estimate replays a log many
@@ -29,6 +29,12 @@ impl PartialEq for SharedMap {
                 (Map::Grid(a), Map::Grid(b)) => a == b,
                 _ => false,
             }
+    }
+}
+
+impl From<Map> for SharedMap {
+    fn from(map: Map) -> Self {
+        Self(Arc::new(map))
     }
 }
 
@@ -388,7 +394,11 @@ impl Log {
         let map = if log.walls.is_empty() {
             None
         } else {
-            let walls = log.walls.iter().map(|w| [w.x1, w.y1, w.x2, w.y2].into()).collect();
+            let walls = log
+                .walls
+                .iter()
+                .map(|w| [w.x1, w.y1, w.x2, w.y2].into())
+                .collect();
             let segments = locus_map::SegmentMap::new(walls).map_err(|e| Error::Map {
                 file: name.to_string(),
                 line: lines.walls.first().copied(),

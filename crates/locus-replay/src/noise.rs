@@ -97,6 +97,13 @@ pub struct Round {
     pub ranges: usize,
     /// Bearing residuals the round used.
     pub bearings: usize,
+    /// Spread of the beams' range residuals (robust, with the smoother's
+    /// own uncertainty), m; NaN without scans.
+    pub beam_spread: f64,
+    /// Their integrated autocorrelation time, in scans (>= 1), per beam.
+    pub beam_tau: f64,
+    /// Beam residuals the round used.
+    pub beam_residuals: usize,
     /// The smoother's calibration over the whole log, `(mean, standard
     /// deviation)` in the order of `Report::calibration`.
     pub calibration: [(f64, f64); 4],
@@ -123,6 +130,19 @@ impl Round {
             self.bearing_spread * self.bearing_tau.sqrt(),
             self.bearings,
             self.bearing_tau,
+        )
+    }
+}
+
+impl Round {
+    /// Standard error of the beams' noise the round sets, m (as
+    /// [`Round::range_se`]).
+    #[must_use]
+    pub fn beam_se(&self) -> f64 {
+        spread_se(
+            self.beam_spread * self.beam_tau.sqrt(),
+            self.beam_residuals,
+            self.beam_tau,
         )
     }
 }
@@ -265,12 +285,22 @@ fn batch_tau(residuals: &[(u32, f64, f64)], sigma: f64) -> f64 {
 #[allow(clippy::cast_precision_loss)]
 pub fn measurement_round(log: &Log, cfg: &Config) -> Result<(Round, Config), Error> {
     let mut kept: Vec<Kept> = Vec::with_capacity(log.sightings.len());
+    let mut scans: Vec<KeptScan> = Vec::with_capacity(log.scans.len());
     let run = Config {
         smooth: true,
         evaluate: false,
         ..*cfg
     };
     let report = replay(log, &run, |s: &Step| {
+        if let (EventKind::Scan { index, .. }, Some(p), Some(c)) =
+            (s.kind, s.smoothed, s.smoothed_calibration)
+        {
+            scans.push(KeptScan {
+                index,
+                state: smoothed_state(&p.x, &c),
+                covariance: p.p,
+            });
+        }
         if let (EventKind::Sighting { sighting, .. }, Some(p), Some(c)) =
             (s.kind, s.smoothed, s.smoothed_calibration)
         {
@@ -330,7 +360,12 @@ pub fn measurement_round(log: &Log, cfg: &Config) -> Result<(Round, Config), Err
         robust_spread(bearings.iter().map(|r| r.2).collect()).hypot((hph[1] / n_bearing).sqrt());
     let range_tau = batch_tau(&ranges, range_spread);
     let bearing_tau = batch_tau(&bearings, bearing_spread);
+    let (beam_spread, beam_tau, beam_residuals) = beam_noise(log, cfg, &scans);
     let mut next = *cfg;
+    let sbeam = beam_spread * beam_tau.sqrt();
+    if sbeam.is_finite() && sbeam > 0.0 {
+        next.beams.sigma = sbeam;
+    }
     let sr = range_spread * range_tau.sqrt();
     let sb = bearing_spread * bearing_tau.sqrt();
     if sr.is_finite() && sr > 0.0 {
@@ -348,10 +383,81 @@ pub fn measurement_round(log: &Log, cfg: &Config) -> Result<(Round, Config), Err
             bearing_tau,
             ranges: ranges.len(),
             bearings: bearings.len(),
+            beam_spread,
+            beam_tau,
+            beam_residuals,
             calibration: report.smoothed_calibration.unwrap_or(report.calibration),
         },
         next,
     ))
+}
+
+/// What a round keeps of each smoothed scan.
+struct KeptScan {
+    index: usize,
+    state: SVector<f64, STATE>,
+    covariance: locus_core::nalgebra::Matrix3<f64>,
+}
+
+/// The state of a smoothed pose `x` and calibration `c`.
+fn smoothed_state(x: &locus_core::nalgebra::Vector3<f64>, c: &[f64; 4]) -> SVector<f64, STATE> {
+    let mut state = SVector::<f64, STATE>::zeros();
+    for i in 0..3 {
+        state[i] = x[i];
+    }
+    for i in 0..4 {
+        state[3 + i] = c[i];
+    }
+    state
+}
+
+/// The beams' noise from the smoothed scans: each chosen beam with a
+/// reading, cast in the map from the smoothed pose, gives a residual
+/// (reading minus the range to the surface); their robust spread with the
+/// smoother's own uncertainty (`H Ps H^T`), and their autocorrelation time
+/// from scan to scan per beam ([`batch_tau`], each beam a series).
+/// Returns `(spread m, tau, residuals)`; NaN and 1 without any.
+#[allow(clippy::cast_precision_loss)]
+fn beam_noise(log: &Log, cfg: &Config, scans: &[KeptScan]) -> (f64, f64, usize) {
+    use locus_logs::scans::Reading;
+    let Some(map) = log.map.as_deref() else {
+        return (f64::NAN, 1.0, 0);
+    };
+    let mut residuals = Vec::new();
+    let mut hph = 0.0;
+    for k in scans {
+        let Some(scan) = log.scans.get(k.index) else {
+            continue;
+        };
+        let Some(sensor) = log.beam_sensors.iter().find(|b| b.id == scan.sensor) else {
+            continue;
+        };
+        for b in crate::filter::chosen_beams(scan.ranges.len(), cfg.beams.per_scan) {
+            let Reading::Range(z) = Reading::of(scan.ranges[b]) else {
+                continue;
+            };
+            let Some(model) = crate::filter::beam_model(map, sensor, b, &k.state, &cfg.beams)
+            else {
+                continue;
+            };
+            let Some(h) = model.h(&k.state) else { continue };
+            let j = model
+                .jacobian(&k.state)
+                .fixed_view::<1, 3>(0, 0)
+                .into_owned();
+            hph += (j * k.covariance * j.transpose())[(0, 0)];
+            // One series per sensor and beam.
+            let series = scan.sensor.wrapping_mul(1 << 17).wrapping_add(b as u32);
+            residuals.push((series, scan.time, f64::from(z) - h[0]));
+        }
+    }
+    if residuals.is_empty() {
+        return (f64::NAN, 1.0, 0);
+    }
+    let n = residuals.len() as f64;
+    let spread = robust_spread(residuals.iter().map(|r| r.2).collect()).hypot((hph / n).sqrt());
+    let tau = batch_tau(&residuals, spread);
+    (spread, tau, residuals.len())
 }
 
 /// The innovation negative log-likelihood of a filter-only replay.
@@ -470,6 +576,7 @@ fn pin(mut cfg: Config, given: &NoiseRecords) -> Config {
     cfg.q_omega = given.q_omega.unwrap_or(cfg.q_omega);
     cfg.sigma_range = given.sigma_range.unwrap_or(cfg.sigma_range);
     cfg.sigma_bearing = given.sigma_bearing.unwrap_or(cfg.sigma_bearing);
+    cfg.beams.sigma = given.sigma_beam.unwrap_or(cfg.beams.sigma);
     cfg
 }
 
@@ -488,7 +595,8 @@ fn converge(
         rounds.push(r);
         let change = (next.sigma_range / cfg.sigma_range - 1.0)
             .abs()
-            .max((next.sigma_bearing / cfg.sigma_bearing - 1.0).abs());
+            .max((next.sigma_bearing / cfg.sigma_bearing - 1.0).abs())
+            .max((next.beams.sigma / cfg.beams.sigma - 1.0).abs());
         cfg = next;
         if change < CONVERGED {
             break;

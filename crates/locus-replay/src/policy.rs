@@ -183,6 +183,13 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
         *slot(&mut cfg, name) = value;
         sources[i] = source;
     }
+    let (beam_sigma, mut beam_source) = match (overrides.noise.sigma_beam, log.noise.sigma_beam) {
+        (Some(v), _) => (v, Source::Given),
+        (None, Some(v)) => (v, Source::LogRecord),
+        (None, None) => (defaults.beams.sigma, Source::Default),
+    };
+    cfg.beams.sigma = beam_sigma;
+    let (mut beam_se, mut beam_widening) = (f64::NAN, 1.0);
     cfg.odometry_delay = overrides.odometry_delay.unwrap_or(0.0);
     sources[4] = if overrides.odometry_delay.is_some() {
         Source::Given
@@ -252,6 +259,19 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
                     };
                 }
             }
+            if beam_source == Source::Default {
+                match last.filter(|r| r.beam_residuals > 0) {
+                    Some(r) => {
+                        beam_source = Source::Estimated;
+                        beam_widening = r.beam_tau.sqrt();
+                        beam_se = r.beam_se();
+                    }
+                    None => {
+                        beam_source = Source::Untold;
+                        cfg.beams.sigma = defaults.beams.sigma;
+                    }
+                }
+            }
             if overrides.odometry_delay.is_none() {
                 sources[4] = Source::Estimated;
             }
@@ -295,6 +315,16 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
             level: get(&cfg, name) / widening[i],
         })
         .collect();
+    if !log.scans.is_empty() {
+        settings.push(Setting {
+            name: "sigma_beam",
+            unit: "m",
+            value: cfg.beams.sigma,
+            source: beam_source,
+            se: beam_se,
+            level: cfg.beams.sigma / beam_widening,
+        });
+    }
     settings.push(Setting {
         name: "odometry_delay",
         unit: "s",

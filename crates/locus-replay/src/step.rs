@@ -136,6 +136,8 @@ pub enum EventKind {
     },
     /// A scan of a beam sensor.
     Scan {
+        /// Its index in [`Log::scans`](crate::Log::scans).
+        index: usize,
         /// The beam sensor's id.
         sensor: u32,
         /// What its beams did.

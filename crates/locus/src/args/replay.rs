@@ -5,10 +5,13 @@
 
 use std::path::PathBuf;
 
+use anyhow::Context as _;
 use clap::{Args as ClapArgs, Subcommand};
+use locus_logs::mrclam::Dataset;
 use locus_models::plausible::Limits;
+use locus_replay::log::SharedMap;
 use locus_replay::policy::{Estimation, Overrides};
-use locus_replay::{Config, Start};
+use locus_replay::{Config, Log, Start};
 
 use crate::plot::PictureArgs;
 
@@ -58,6 +61,102 @@ pub enum Source {
         #[command(flatten)]
         common: Flags,
     },
+    /// The laser-to-a-wall log of paper 000's sensor in one dimension
+    /// (`../shared/data/laser_wall_1d/dataset1.txt`: a robot on a rail,
+    /// a laser rangefinder to a wall, Vicon truth): the wall, a one-beam
+    /// sensor, speed odometry and position truth (docs/log-format.md).
+    LaserWall {
+        /// The data file (`t v r x_true` lines after the header).
+        file: PathBuf,
+        /// Also write the log in Locus's CSV format to this file.
+        #[arg(long)]
+        export: Option<PathBuf>,
+        #[command(flatten)]
+        common: Flags,
+    },
+    /// A CARMEN log with corrected poses (e.g.
+    /// `../shared/data/intel_lab/intel-corrected.log.gz`): laser scans,
+    /// raw odometry, the corrected poses as truth at the scan times. The
+    /// map comes from `--map` (e.g. one `locus map` made).
+    Carmen {
+        /// The CARMEN log (`.gz` read directly).
+        file: PathBuf,
+        /// The map the scans are corrected against (ROS map_server YAML,
+        /// or walls as text or TOML: docs/maps.md).
+        #[arg(long)]
+        map: PathBuf,
+        /// Also write the log in Locus's CSV format to this file.
+        #[arg(long)]
+        export: Option<PathBuf>,
+        #[command(flatten)]
+        common: Flags,
+    },
+}
+
+impl Source {
+    /// The log, where to export it (if asked) and the replay's flags.
+    ///
+    /// # Errors
+    /// A log or map that cannot be read, naming the file (and line).
+    pub fn read(&self) -> anyhow::Result<(Log, Option<&PathBuf>, &Flags)> {
+        let name = |p: &std::path::Path| {
+            p.file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+        };
+        Ok(match self {
+            Self::Mrclam {
+                dir,
+                robot,
+                export,
+                common,
+            } => (
+                Log::mrclam(&Dataset::open(dir)?, *robot)?,
+                export.as_ref(),
+                common,
+            ),
+            Self::Csv { file, common } => (Log::locus_csv(file)?, None, common),
+            Self::Librsf {
+                input,
+                truth,
+                export,
+                common,
+            } => {
+                let truth = truth
+                    .clone()
+                    .or_else(|| locus_logs::librsf::sibling_truth(input));
+                (
+                    Log::librsf(input, truth.as_deref())?,
+                    export.as_ref(),
+                    common,
+                )
+            }
+            Self::LaserWall {
+                file,
+                export,
+                common,
+            } => {
+                let read = locus_logs::aer1513::read(file)?;
+                (
+                    Log::from_locus(&name(file), read.log)?,
+                    export.as_ref(),
+                    common,
+                )
+            }
+            Self::Carmen {
+                file,
+                map,
+                export,
+                common,
+            } => {
+                let read = locus_logs::carmen::read(file)?;
+                let mut log = Log::from_locus(&name(file), read.log)?;
+                let loaded = locus_replay::log::Map::load(map)
+                    .with_context(|| format!("reading the map {}", map.display()))?;
+                log.map = Some(SharedMap::from(loaded));
+                (log, export.as_ref(), common)
+            }
+        })
+    }
 }
 
 /// The replay's options, the same for every source.
@@ -89,6 +188,16 @@ pub struct Flags {
     /// Default: the log's `noise` record, else estimated from the log.
     #[arg(long, value_parser = super::positive_f64)]
     pub sigma_bearing: Option<f64>,
+    /// Standard deviation of a beam's range (range sensors against the
+    /// map: IR, laser, lidar), m. Default: the log's `noise` record, else
+    /// estimated from the log.
+    #[arg(long, value_parser = super::positive_f64)]
+    pub sigma_beam: Option<f64>,
+    /// Beams a scan spends at most, spread evenly over it [count, >= 1]:
+    /// neighbouring beams see the same surface with errors alike, so beyond
+    /// a few tens each adds little information for its time (docs/replay.md).
+    #[arg(long, default_value_t = locus_replay::Beams::default().per_scan, value_parser = clap::value_parser!(u32).range(1..))]
+    pub beams_per_scan: u32,
     /// Initial value of the forward-speed scale factor (a state the filter
     /// estimates: the logged speed times it is the robot's).
     #[arg(long, default_value_t = 1.0, value_parser = super::positive_f64)]
@@ -172,6 +281,10 @@ impl Flags {
                 initial: [self.v_scale, self.omega_scale, 0.0, 0.0],
                 ..locus_replay::Calibration::default()
             },
+            beams: locus_replay::Beams {
+                per_scan: self.beams_per_scan,
+                ..locus_replay::Beams::default()
+            },
             limits: Limits {
                 max_speed: self.max_speed,
                 max_turn_rate: self.max_turn_rate,
@@ -191,7 +304,7 @@ impl Flags {
                 q_omega: self.q_omega,
                 sigma_range: self.sigma_range,
                 sigma_bearing: self.sigma_bearing,
-                sigma_beam: None,
+                sigma_beam: self.sigma_beam,
             },
             odometry_delay: self.odometry_delay,
             estimation: if self.no_estimate {

@@ -17,7 +17,6 @@ use anyhow::{Context, Result};
 use comfy_table::Table;
 use locus_eval::Sample;
 use locus_eval::results::{Calibration, Results};
-use locus_logs::mrclam::Dataset;
 use locus_replay::policy::{Settled, Source as From, settle};
 use locus_replay::results::Section;
 use locus_replay::{Log, Report, csv_out::replay_to_csv};
@@ -41,26 +40,7 @@ pub struct Args {
 /// A log that cannot be read (file and line named), an invalid setting, a
 /// file that cannot be written.
 pub fn run(args: &Args) -> Result<()> {
-    let (log, export, flags) = match &args.source {
-        Source::Mrclam {
-            dir,
-            robot,
-            export,
-            common,
-        } => (Log::mrclam(&Dataset::open(dir)?, *robot)?, export, common),
-        Source::Csv { file, common } => (Log::locus_csv(file)?, &None, common),
-        Source::Librsf {
-            input,
-            truth,
-            export,
-            common,
-        } => {
-            let truth = truth
-                .clone()
-                .or_else(|| locus_logs::librsf::sibling_truth(input));
-            (Log::librsf(input, truth.as_deref())?, export, common)
-        }
-    };
+    let (log, export, flags) = args.source.read()?;
     if let Some(path) = export {
         fs::write(path, locus_logs::locus_csv::write(&log.to_locus()))
             .with_context(|| format!("writing {}", path.display()))?;
