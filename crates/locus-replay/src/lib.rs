@@ -84,6 +84,7 @@ pub mod initial;
 pub mod log;
 pub mod noise;
 pub mod policy;
+pub mod rail;
 pub mod refusals;
 mod report;
 pub mod results;

@@ -6,8 +6,8 @@
 //! their scans. Built from an MRCLAM dataset ([`Log::mrclam`]) or a Locus
 //! CSV log ([`Log::locus_csv`]).
 
-use std::path::Path;
 use alloc::sync::Arc;
+use std::path::Path;
 
 pub use locus_logs::MapPath;
 use locus_logs::locus_csv::{self, LocusLog};

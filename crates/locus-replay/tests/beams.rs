@@ -215,3 +215,23 @@ fn the_beams_noise_is_estimated_from_the_log() {
         "{s:?}"
     );
 }
+
+/// The laser_wall_1d baselines reproduce the figures the data's README
+/// gives (measured there by its own script): the range alone 0.0192 m, the
+/// linear Kalman filter given the published noise 0.0253 m with 66 % of
+/// steps inside its 3 sigma.
+#[test]
+fn the_laser_wall_baselines_match_the_published_figures() {
+    let path = std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/laser_wall_1d/dataset1.txt"
+    ));
+    let read = locus_logs::aer1513::read(path).expect("laser_wall_1d");
+    let log = Log::from_locus("dataset1.txt", read.log).unwrap();
+    let [range, kf] = locus_replay::rail::baselines(&log, read.wall_x, read.r_var, read.v_var);
+    println!("range alone {range:?}\nlinear KF {kf:?}");
+    assert_eq!(range.compared, 12709);
+    assert!((range.rmse - 0.0192).abs() < 0.00005, "{range:?}");
+    assert!((kf.rmse - 0.0253).abs() < 0.00005, "{kf:?}");
+    assert!((kf.within_3_sigma - 0.66).abs() < 0.01, "{kf:?}");
+}

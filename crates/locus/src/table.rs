@@ -3,11 +3,13 @@
 //! the summary of a single run, shared by `locus run` and `locus replay`
 //! ([`summary`]), and tables of the results schema
 //! ([`locus_eval::results`]): the estimators' honesty ([`honesty`]) and
-//! the calibration ([`calibration`]).
+//! the calibration ([`calibration`]); and the replay's settings as its
+//! policy settled them ([`settings`]).
 
 use comfy_table::{Row, Table, presets::UTF8_FULL};
 use locus_eval::Summary;
 use locus_eval::results::{Calibration, MeanStd, Results};
+use locus_replay::policy::{Settled, Source as From};
 
 /// An empty table in the commands' style with the column names `header`.
 pub fn with_header(header: impl Into<Row>) -> Table {
@@ -158,6 +160,75 @@ pub fn calibration(filter: &Calibration, smoother: Option<&Calibration>) -> Tabl
             pm(term),
             smoothed.map_or_else(|| "-".to_string(), |s| pm(s[i])),
         ]);
+    }
+    t
+}
+
+/// The noise and odometry delay replayed with, where each came from (flag,
+/// the log's record, the estimate, the default) and, for an estimate, its
+/// standard error and the level the log itself shows; the biases held or
+/// estimated.
+#[must_use]
+pub fn settings(settled: &Settled) -> Table {
+    let mut t = with_header([
+        "setting [unit]",
+        "value",
+        "+- (1 sigma)",
+        "level the log shows (x widening)",
+        "from",
+    ]);
+    for s in &settled.settings {
+        let decimals = if s.name == "odometry_delay" { 2 } else { 5 };
+        t.add_row(vec![
+            format!("{} [{}]", s.name, s.unit),
+            format!("{:.decimals$}", s.value),
+            if s.source == From::Estimated {
+                fig(s.se, 1.0, decimals)
+            } else {
+                "-".to_string()
+            },
+            if s.level == s.value {
+                "-".to_string()
+            } else {
+                format!("{:.decimals$} (x{:.2})", s.level, s.value / s.level)
+            },
+            s.source.to_string(),
+        ]);
+    }
+    if let Some(e) = &settled.estimate {
+        t.add_row(vec![
+            "process noise raised after the gaps [x]".to_string(),
+            format!("{}", e.gap_factor),
+            "-".to_string(),
+            "-".to_string(),
+            format!(
+                "the median NIS of the sightings after gaps of {} s or more against \
+                 chi-square's (1: honest already, or fewer than {} such sightings)",
+                locus_replay::noise::GAP,
+                locus_replay::noise::MIN_POST_GAP
+            ),
+        ]);
+    }
+    for b in &settled.biases {
+        let (m, sd) = b.smoothed;
+        let (value, from) = if b.held {
+            (
+                "held at 0".to_string(),
+                format!(
+                    "the log cannot tell it: the whole log gives {m:.4} +- {sd:.4}, over {} of \
+                     the prior's {}",
+                    locus_replay::policy::HOLD_RATIO,
+                    b.prior_std
+                ),
+            )
+        } else {
+            (
+                format!("estimated from 0 +- {}", b.prior_std),
+                format!("the whole log tells it: {m:.4} +- {sd:.4}"),
+            )
+        };
+        let name = format!("{} [{}]", b.name, b.unit);
+        t.add_row(vec![name, value, "-".to_string(), "-".to_string(), from]);
     }
     t
 }

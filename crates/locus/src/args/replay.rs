@@ -93,12 +93,38 @@ pub enum Source {
     },
 }
 
+/// A log read for `locus replay`, with what its source adds.
+pub struct Loaded<'a> {
+    /// The log.
+    pub log: Log,
+    /// Where to export it, if asked.
+    pub export: Option<&'a PathBuf>,
+    /// The replay's flags.
+    pub flags: &'a Flags,
+    /// For a robot on a rail ranging a wall: the wall's position (m) and
+    /// the published range (m^2) and speed (m^2/s^2) variances, for the
+    /// baselines (`locus_replay::rail`).
+    pub rail: Option<[f64; 3]>,
+}
+
 impl Source {
-    /// The log, where to export it (if asked) and the replay's flags.
+    /// The log, where to export it (if asked), the replay's flags and the
+    /// rail's figures (see [`Loaded`]).
     ///
     /// # Errors
     /// A log or map that cannot be read, naming the file (and line).
-    pub fn read(&self) -> anyhow::Result<(Log, Option<&PathBuf>, &Flags)> {
+    pub fn read(&self) -> anyhow::Result<Loaded<'_>> {
+        let mut rail = None;
+        let (log, export, flags) = self.log(&mut rail)?;
+        Ok(Loaded {
+            log,
+            export,
+            flags,
+            rail,
+        })
+    }
+
+    fn log(&self, rail: &mut Option<[f64; 3]>) -> anyhow::Result<(Log, Option<&PathBuf>, &Flags)> {
         let name = |p: &std::path::Path| {
             p.file_name()
                 .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
@@ -136,6 +162,7 @@ impl Source {
                 common,
             } => {
                 let read = locus_logs::aer1513::read(file)?;
+                *rail = Some([read.wall_x, read.r_var, read.v_var]);
                 (
                     Log::from_locus(&name(file), read.log)?,
                     export.as_ref(),

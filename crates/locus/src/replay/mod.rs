@@ -17,7 +17,7 @@ use anyhow::{Context, Result};
 use comfy_table::Table;
 use locus_eval::Sample;
 use locus_eval::results::{Calibration, Results};
-use locus_replay::policy::{Settled, Source as From, settle};
+use locus_replay::policy::{Settled, settle};
 use locus_replay::results::Section;
 use locus_replay::{Log, Report, csv_out::replay_to_csv};
 
@@ -40,12 +40,13 @@ pub struct Args {
 /// A log that cannot be read (file and line named), an invalid setting, a
 /// file that cannot be written.
 pub fn run(args: &Args) -> Result<()> {
-    let (log, export, flags) = args.source.read()?;
+    let loaded = args.source.read()?;
+    let (log, export, flags) = (&loaded.log, loaded.export, loaded.flags);
     if let Some(path) = export {
         fs::write(path, locus_logs::locus_csv::write(&log.to_locus()))
             .with_context(|| format!("writing {}", path.display()))?;
     }
-    let settled = settle(&log, &flags.config(), &flags.overrides())
+    let settled = settle(log, &flags.config(), &flags.overrides())
         .with_context(|| format!("settling the noise of {}", log.name))?;
     let slug: String = log
         .name
@@ -56,10 +57,16 @@ pub fn run(args: &Args) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("out/replay-{slug}")));
-    execute(&log, &settled, flags, &out)
+    execute(log, &settled, flags, &out, loaded.rail)
 }
 
-fn execute(log: &Log, settled: &Settled, flags: &Flags, out: &Path) -> Result<()> {
+fn execute(
+    log: &Log,
+    settled: &Settled,
+    flags: &Flags,
+    out: &Path,
+    rail: Option<[f64; 3]>,
+) -> Result<()> {
     let cfg = &settled.config;
     crate::output::prepare_run_dir(out)?;
     let csv_path = out.join("log.csv");
@@ -115,14 +122,26 @@ fn execute(log: &Log, settled: &Settled, flags: &Flags, out: &Path) -> Result<()
     if let Some(d) = &report.start_disagreement {
         text.push_str(&format!("{d}\n"));
     }
-    text.push_str(&crate::table::summary(
-        ("EKF (odometry + landmarks)", "landmark"),
-        &report.summary,
-    ));
+    let labels = match (log.sightings.is_empty(), log.scans.is_empty()) {
+        (true, false) => ("EKF (odometry + beams)", "scan"),
+        (false, false) => ("EKF (odometry + landmarks + beams)", "landmark or scan"),
+        _ => ("EKF (odometry + landmarks)", "landmark"),
+    };
+    text.push_str(&crate::table::summary(labels, &report.summary));
     let smoother_calibration = report.smoothed_calibration.map(Calibration::from_pairs);
+    let mut honesty = crate::table::honesty(&results);
+    if let Some([wall, r_var, v_var]) = rail {
+        // Beside them: what the rail's range alone and the linear Kalman
+        // filter given the published noise reach (x only).
+        let [range, kf] = locus_replay::rail::baselines(log, wall, r_var, v_var);
+        for (name, b) in [("range alone", range), ("linear KF, published noise", kf)] {
+            let share = format!("{} (x)", fig(b.within_3_sigma, 100.0, 1));
+            honesty.add_row([name, &fig(b.rmse, 1.0, 3), "n/a", "n/a", "n/a", &share]);
+        }
+    }
     for table in [
-        crate::table::honesty(&results),
-        settings(settled),
+        honesty,
+        crate::table::settings(settled),
         crate::table::calibration(&section.calibration, smoother_calibration.as_ref()),
         counts(&report, &section),
     ] {
@@ -134,74 +153,6 @@ fn execute(log: &Log, settled: &Settled, flags: &Flags, out: &Path) -> Result<()
         text.push_str(&format!("smoothed: {}\n", smoothed_path.display()));
     }
     print_out(&text)
-}
-
-/// The noise and odometry delay replayed with, where each came from (flag,
-/// the log's record, the estimate, the default) and, for an estimate, its
-/// standard error and the level the log itself shows; the biases held or
-/// estimated.
-fn settings(settled: &Settled) -> Table {
-    let mut t = with_header([
-        "setting [unit]",
-        "value",
-        "+- (1 sigma)",
-        "level the log shows (x widening)",
-        "from",
-    ]);
-    for s in &settled.settings {
-        let decimals = if s.name == "odometry_delay" { 2 } else { 5 };
-        t.add_row(vec![
-            format!("{} [{}]", s.name, s.unit),
-            format!("{:.decimals$}", s.value),
-            if s.source == From::Estimated {
-                fig(s.se, 1.0, decimals)
-            } else {
-                "-".to_string()
-            },
-            if s.level == s.value {
-                "-".to_string()
-            } else {
-                format!("{:.decimals$} (x{:.2})", s.level, s.value / s.level)
-            },
-            s.source.to_string(),
-        ]);
-    }
-    if let Some(e) = &settled.estimate {
-        t.add_row(vec![
-            "process noise raised after the gaps [x]".to_string(),
-            format!("{}", e.gap_factor),
-            "-".to_string(),
-            "-".to_string(),
-            format!(
-                "the median NIS of the sightings after gaps of {} s or more against \
-                 chi-square's (1: honest already, or fewer than {} such sightings)",
-                locus_replay::noise::GAP,
-                locus_replay::noise::MIN_POST_GAP
-            ),
-        ]);
-    }
-    for b in &settled.biases {
-        let (m, sd) = b.smoothed;
-        let (value, from) = if b.held {
-            (
-                "held at 0".to_string(),
-                format!(
-                    "the log cannot tell it: the whole log gives {m:.4} +- {sd:.4}, over {} of \
-                     the prior's {}",
-                    locus_replay::policy::HOLD_RATIO,
-                    b.prior_std
-                ),
-            )
-        } else {
-            (
-                format!("estimated from 0 +- {}", b.prior_std),
-                format!("the whole log tells it: {m:.4} +- {sd:.4}"),
-            )
-        };
-        let name = format!("{} [{}]", b.name, b.unit);
-        t.add_row(vec![name, value, "-".to_string(), "-".to_string(), from]);
-    }
-    t
 }
 
 /// The replay's own counts: what happened to the log's records.
@@ -260,6 +211,25 @@ fn counts(r: &Report, section: &Section) -> Table {
     let mut t = with_header(["replay [unit]", "value"]);
     for (k, v) in rows {
         t.add_row(vec![k.to_string(), v]);
+    }
+    let b = &r.beams;
+    if r.scans > 0 {
+        t.add_row(vec![
+            "scans / beams in them / beams chosen [count]".to_string(),
+            format!("{} / {} / {}", r.scans, b.beams, b.chosen),
+        ]);
+        t.add_row(vec![
+            "beams applied / gated / down-weighted [count]".to_string(),
+            format!("{} / {} / {}", b.applied, b.gated, b.down_weighted),
+        ]);
+        t.add_row(vec![
+            "beams skipped: no return / no surface or grazing / short / unusable [count]"
+                .to_string(),
+            format!(
+                "{} / {} / {} / {}",
+                b.no_return, b.no_surface, b.short, b.unusable
+            ),
+        ]);
     }
     t
 }
