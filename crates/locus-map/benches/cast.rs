@@ -1,7 +1,9 @@
 //! A 180-beam scan cast on a wall map of 100 random walls (20 m square) and
 //! on the same walls rasterised into a 420 x 420 grid at 0.05 m; beams span
 //! 360 degrees from 16 poses inside the map, with an 8 m range limit (the
-//! simulator's and Intel lab's lidar's) and without one. Criterion reports
+//! simulator's and Intel lab's lidar's) and without one. Beside the grid's
+//! cast, the reference cast it replaced (`Grid::cast_reference`, the same
+//! hits), as its peer in the same run. Criterion reports
 //! the time per scan; divide by 180 for the time per beam (the throughput it
 //! prints is beams per second).
 //!
@@ -11,7 +13,7 @@ use core::f64::consts::PI;
 use core::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use locus_map::{Grid, GridGeometry, Map, Segment, SegmentMap, Thresholds};
+use locus_map::{Grid, GridGeometry, Hit, Map, Segment, SegmentMap, Thresholds};
 
 const BEAMS: usize = 180;
 
@@ -52,20 +54,37 @@ fn walls(rng: &mut Rng) -> Vec<Segment> {
     out
 }
 
+/// Benchmarks `cast` over a 180-beam scan from each of `poses` in turn.
+fn scan(
+    group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    name: &str,
+    poses: &[[f64; 3]],
+    cast: impl Fn([f64; 2], f64) -> Option<Hit>,
+) {
+    let mut k = 0;
+    group.bench_function(name, |b| {
+        b.iter(|| {
+            let p = poses[k % poses.len()];
+            k += 1;
+            let mut sum = 0.0;
+            for i in 0..BEAMS {
+                let a = p[2] + 2.0 * PI * i as f64 / BEAMS as f64;
+                if let Some(h) = cast(black_box([p[0], p[1]]), black_box(a)) {
+                    sum += h.range + h.incidence;
+                }
+            }
+            black_box(sum)
+        });
+    });
+}
+
 fn bench(c: &mut Criterion) {
     let mut rng = Rng(29);
     let walls = walls(&mut rng);
     let geometry = GridGeometry::covering([0.0, 0.0], [20.0, 20.0], 0.5, 0.05).unwrap();
-    let maps = [
-        (
-            "segments_100",
-            Map::from(SegmentMap::new(walls.clone()).unwrap()),
-        ),
-        (
-            "grid_420x420",
-            Map::from(Grid::rasterise(&walls, geometry, Thresholds::default()).unwrap()),
-        ),
-    ];
+    let segments = Map::from(SegmentMap::new(walls.clone()).unwrap());
+    let grid = Grid::rasterise(&walls, geometry, Thresholds::default()).unwrap();
+    let grid_map = Map::from(grid.clone());
     let poses: Vec<[f64; 3]> = (0..16)
         .map(|_| {
             [
@@ -77,24 +96,25 @@ fn bench(c: &mut Criterion) {
         .collect();
     let mut group = c.benchmark_group("scan_180");
     group.throughput(Throughput::Elements(BEAMS as u64));
-    for (name, map) in &maps {
-        for (limit_name, limit) in [("8m", 8.0), ("unlimited", f64::INFINITY)] {
-            let mut k = 0;
-            group.bench_function(format!("{name}/{limit_name}"), |b| {
-                b.iter(|| {
-                    let p = poses[k % poses.len()];
-                    k += 1;
-                    let mut sum = 0.0;
-                    for i in 0..BEAMS {
-                        let a = p[2] + 2.0 * PI * i as f64 / BEAMS as f64;
-                        if let Some(h) = map.cast(black_box([p[0], p[1]]), black_box(a), limit) {
-                            sum += h.range + h.incidence;
-                        }
-                    }
-                    black_box(sum)
-                });
-            });
-        }
+    for (limit_name, limit) in [("8m", 8.0), ("unlimited", f64::INFINITY)] {
+        scan(
+            &mut group,
+            &format!("segments_100/{limit_name}"),
+            &poses,
+            |o, a| segments.cast(o, a, limit),
+        );
+        scan(
+            &mut group,
+            &format!("grid_420x420/{limit_name}"),
+            &poses,
+            |o, a| grid_map.cast(o, a, limit),
+        );
+        scan(
+            &mut group,
+            &format!("grid_420x420_reference/{limit_name}"),
+            &poses,
+            |o, a| grid.cast_reference(o, a, limit),
+        );
     }
     group.finish();
 }

@@ -1,5 +1,6 @@
 //! The ray cast on an occupancy grid: the exact cell traversal (Amanatides
-//! and Woo) to the first occupied cell.
+//! and Woo) to the first occupied cell, read a bit a cell (`bits.rs`,
+//! `Traversal::first`), and the normal fitted there (`normal.rs`).
 
 use crate::grid::Grid;
 use crate::hit::{Hit, HitSource, direction, facing, valid_ray};
@@ -28,9 +29,9 @@ impl Grid {
         let p = g.to_cells(origin);
         let res = g.resolution();
         let v = [dg[0] / res, dg[1] / res];
-        let cell = Traversal::new(p, v, max_range, g.width(), g.height())
-            .find(|c| self.occupied(c.ix, c.iy))?;
-        let ng = normal::estimate(self, cell.ix, cell.iy, cell.face, dg);
+        let bits = self.occupied_bits();
+        let cell = Traversal::new(p, v, max_range, g.width(), g.height()).first(|k| bits.get(k))?;
+        let ng = normal::estimate(bits, cell.ix, cell.iy, cell.face, dg);
         let (normal, incidence) = facing(g.rotate_out(ng), d);
         let t = cell.t_enter;
         Some(Hit {

@@ -2,6 +2,7 @@
 //! its state, occupied, free or unknown, by ROS map_server's thresholds.
 
 use crate::MapError;
+use crate::bits::OccupiedBits;
 use crate::geometry::GridGeometry;
 use crate::segments::Segment;
 use crate::traverse::Traversal;
@@ -87,6 +88,8 @@ pub struct Grid {
     /// Probability per cell (row-major, row 0 at the bottom), NaN: unknown.
     probability: Vec<f32>,
     state: Vec<Occupancy>,
+    /// Whether each cell is occupied (the states, as the cast reads them).
+    occupied: OccupiedBits,
 }
 
 impl PartialEq for Grid {
@@ -116,6 +119,7 @@ impl Grid {
             thresholds,
             probability: vec![f32::NAN; geometry.len()],
             state: vec![Occupancy::Unknown; geometry.len()],
+            occupied: OccupiedBits::new(geometry.width(), geometry.height()),
         })
     }
 
@@ -238,6 +242,12 @@ impl Grid {
         self.state[self.geometry.index(ix, iy)] == Occupancy::Occupied
     }
 
+    /// The occupied cells, a bit each.
+    #[inline]
+    pub(crate) fn occupied_bits(&self) -> &OccupiedBits {
+        &self.occupied
+    }
+
     fn inside(&self, ix: usize, iy: usize) -> bool {
         ix < self.geometry.width() && iy < self.geometry.height()
     }
@@ -256,6 +266,7 @@ impl Grid {
         let stored = p.map(|p| p as f32);
         self.probability[k] = stored.unwrap_or(f32::NAN);
         self.state[k] = self.thresholds.classify(stored.map(f64::from));
+        self.occupied.set(k, self.state[k] == Occupancy::Occupied);
         Ok(())
     }
 }

@@ -17,6 +17,7 @@
 //! Units: metres and radians, world frame; angles counter-clockwise from +x.
 //! docs/maps.md describes the formats and methods.
 
+mod bits;
 mod builder;
 mod cast;
 mod error;
@@ -26,6 +27,7 @@ mod hit;
 mod index;
 mod normal;
 mod plane;
+mod reference;
 pub mod ros;
 mod segments;
 pub mod text;

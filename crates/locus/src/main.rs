@@ -13,6 +13,7 @@ mod host;
 mod hw;
 mod hw_rtl;
 mod link_scenario;
+mod map;
 mod metrics;
 mod output;
 mod plot;
@@ -83,6 +84,14 @@ enum Command {
     /// at their own time. Prints the summary against ground truth beside
     /// odometry alone, writes `log.csv`, `metrics.json` and pictures.
     Replay(replay::Args),
+    /// Build an occupancy grid from scans taken at known poses (log-odds
+    /// mapping), to localise in afterwards: from a Locus CSV log with beam
+    /// sensors, scans and ground truth with heading (each scan at the
+    /// truth interpolated at its time), or from a CARMEN log's corrected
+    /// poses (`--carmen`). Writes ROS map_server's `map.yaml` and
+    /// `map.pgm` and a picture `map.png` (grid and path), and prints a
+    /// summary. docs/maps.md.
+    Map(map::Args),
     /// Settings for a fleet: the noise levels and the odometry delay tuned
     /// on some logs (an MRCLAM dataset's robots, or Locus CSV logs), by
     /// default the medians of what `locus replay` estimates from each log
@@ -130,6 +139,7 @@ fn main() -> ExitCode {
         Command::Robot(args) => robot::run(&args),
         Command::Host(args) => host::run(&args),
         Command::Replay(args) => replay::run(&args),
+        Command::Map(args) => map::run(&args),
         Command::Tune(args) => tune::run(&args),
         Command::Family(args) => family::run(&args),
         Command::Serve(args) => serve::run(&args),
