@@ -273,9 +273,7 @@ impl<'a> Engine<'a> {
                 return Ok(false);
             }
         };
-        if !take_odometry
-            && let (Some(t), Some((_, false))) = (scan_time, measurement)
-        {
+        if !take_odometry && let (Some(t), Some((_, false))) = (scan_time, measurement) {
             let index = self.scans;
             self.scans += 1;
             self.finalise_before(t - cfg.horizon);

@@ -9,10 +9,10 @@
 use std::path::Path;
 use std::sync::Arc;
 
+pub use locus_logs::MapPath;
 use locus_logs::locus_csv::{self, LocusLog};
 use locus_logs::mrclam::{Dataset, Groundtruth, Odometry, TruthPose};
 pub use locus_logs::{BeamSensor, Landmark, Lines, NoiseRecords, Scans, SensorMount, Sighting};
-pub use locus_logs::MapPath;
 pub use locus_map::Map;
 
 /// A map shared by the replays of one log (the estimate replays a log many
@@ -388,7 +388,11 @@ impl Log {
         let map = if log.walls.is_empty() {
             None
         } else {
-            let walls = log.walls.iter().map(|w| [w.x1, w.y1, w.x2, w.y2].into()).collect();
+            let walls = log
+                .walls
+                .iter()
+                .map(|w| [w.x1, w.y1, w.x2, w.y2].into())
+                .collect();
             let segments = locus_map::SegmentMap::new(walls).map_err(|e| Error::Map {
                 file: name.to_string(),
                 line: lines.walls.first().copied(),
