@@ -12,21 +12,7 @@
 
 use locus_core::wrap_angle;
 
-/// A relative pose between two times: the pose at `t2` in the frame of the
-/// pose at `t1`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Relation {
-    /// First time, s.
-    pub t1: f64,
-    /// Second time, s.
-    pub t2: f64,
-    /// Displacement along the first pose's heading, m.
-    pub dx: f64,
-    /// Displacement to its left, m.
-    pub dy: f64,
-    /// Change of heading, rad.
-    pub dtheta: f64,
-}
+pub use locus_logs::relations::Relation;
 
 /// `b` in the frame of `a` (`a^-1 (+) b`), poses `[x, y, theta]`.
 #[must_use]
@@ -40,7 +26,7 @@ pub fn between(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 /// relative pose `estimated` (from [`between`]) against `r`.
 #[must_use]
 pub fn error(estimated: [f64; 3], r: &Relation) -> (f64, f64) {
-    let e = between([r.dx, r.dy, r.dtheta], estimated);
+    let e = between([r.dx, r.dy, r.dyaw], estimated);
     (e[0].hypot(e[1]), e[2].abs())
 }
 
@@ -119,7 +105,8 @@ mod tests {
                     t2: j as f64,
                     dx: d[0],
                     dy: d[1],
-                    dtheta: d[2],
+                    dyaw: d[2],
+                    line: 0,
                 }
             })
             .collect();
@@ -140,7 +127,8 @@ mod tests {
             t2: 1.0,
             dx: 1.0,
             dy: 0.0,
-            dtheta: 0.0,
+            dyaw: 0.0,
+            line: 0,
         };
         let a = [3.0, -1.0, 0.7];
         let (s, c) = 0.7_f64.sin_cos();
@@ -159,7 +147,8 @@ mod tests {
             t2: 1.0,
             dx: 1.0,
             dy: 0.0,
-            dtheta: 0.0,
+            dyaw: 0.0,
+            line: 0,
         };
         let e = evaluate(&[r], |_| None);
         assert_eq!((e.judged, e.uncovered), (0, 1));
