@@ -64,7 +64,13 @@ use locus_models::calibrated_range_bearing::CalibratedRangeBearing;
 use locus_models::range_bearing::RangeBearing;
 
 use crate::log::NoiseRecords;
+
+mod beams;
+mod grid;
+
 use crate::{Config, Error, EventKind, Log, STATE, Step, replay};
+use beams::{KeptScan, beam_noise, smoothed_state};
+use grid::grid_minimum;
 
 /// Window of the batch-means estimate of the residuals' correlation, s.
 pub const WINDOW: f64 = 60.0;
@@ -132,9 +138,7 @@ impl Round {
             self.bearing_tau,
         )
     }
-}
 
-impl Round {
     /// Standard error of the beams' noise the round sets, m (as
     /// [`Round::range_se`]).
     #[must_use]
@@ -304,13 +308,7 @@ pub fn measurement_round(log: &Log, cfg: &Config) -> Result<(Round, Config), Err
         if let (EventKind::Sighting { sighting, .. }, Some(p), Some(c)) =
             (s.kind, s.smoothed, s.smoothed_calibration)
         {
-            let mut state = SVector::<f64, STATE>::zeros();
-            for i in 0..3 {
-                state[i] = p.x[i];
-            }
-            for i in 0..4 {
-                state[3 + i] = c[i];
-            }
+            let state = smoothed_state(&p.x, &c);
             kept.push(Kept {
                 time: s.time,
                 landmark: sighting.landmark,
@@ -392,74 +390,6 @@ pub fn measurement_round(log: &Log, cfg: &Config) -> Result<(Round, Config), Err
     ))
 }
 
-/// What a round keeps of each smoothed scan.
-struct KeptScan {
-    index: usize,
-    state: SVector<f64, STATE>,
-    covariance: locus_core::nalgebra::Matrix3<f64>,
-}
-
-/// The state of a smoothed pose `x` and calibration `c`.
-fn smoothed_state(x: &locus_core::nalgebra::Vector3<f64>, c: &[f64; 4]) -> SVector<f64, STATE> {
-    let mut state = SVector::<f64, STATE>::zeros();
-    for i in 0..3 {
-        state[i] = x[i];
-    }
-    for i in 0..4 {
-        state[3 + i] = c[i];
-    }
-    state
-}
-
-/// The beams' noise from the smoothed scans: each chosen beam with a
-/// reading, cast in the map from the smoothed pose, gives a residual
-/// (reading minus the range to the surface); their robust spread with the
-/// smoother's own uncertainty (`H Ps H^T`), and their autocorrelation time
-/// from scan to scan per beam ([`batch_tau`], each beam a series).
-/// Returns `(spread m, tau, residuals)`; NaN and 1 without any.
-#[allow(clippy::cast_precision_loss)]
-fn beam_noise(log: &Log, cfg: &Config, scans: &[KeptScan]) -> (f64, f64, usize) {
-    use locus_logs::scans::Reading;
-    let Some(map) = log.map.as_deref() else {
-        return (f64::NAN, 1.0, 0);
-    };
-    let mut residuals = Vec::new();
-    let mut hph = 0.0;
-    for k in scans {
-        let Some(scan) = log.scans.get(k.index) else {
-            continue;
-        };
-        let Some(sensor) = log.beam_sensors.iter().find(|b| b.id == scan.sensor) else {
-            continue;
-        };
-        for b in crate::filter::chosen_beams(scan.ranges.len(), cfg.beams.per_scan) {
-            let Reading::Range(z) = Reading::of(scan.ranges[b]) else {
-                continue;
-            };
-            let Some(model) = crate::filter::beam_model(map, sensor, b, &k.state, &cfg.beams)
-            else {
-                continue;
-            };
-            let Some(h) = model.h(&k.state) else { continue };
-            let j = model
-                .jacobian(&k.state)
-                .fixed_view::<1, 3>(0, 0)
-                .into_owned();
-            hph += (j * k.covariance * j.transpose())[(0, 0)];
-            // One series per sensor and beam.
-            let series = scan.sensor.wrapping_mul(1 << 17).wrapping_add(b as u32);
-            residuals.push((series, scan.time, f64::from(z) - h[0]));
-        }
-    }
-    if residuals.is_empty() {
-        return (f64::NAN, 1.0, 0);
-    }
-    let n = residuals.len() as f64;
-    let spread = robust_spread(residuals.iter().map(|r| r.2).collect()).hypot((hph / n).sqrt());
-    let tau = batch_tau(&residuals, spread);
-    (spread, tau, residuals.len())
-}
-
 /// The innovation negative log-likelihood of a filter-only replay.
 fn nll(log: &Log, cfg: &Config) -> Result<f64, Error> {
     let run = Config {
@@ -468,55 +398,6 @@ fn nll(log: &Log, cfg: &Config) -> Result<f64, Error> {
         ..*cfg
     };
     Ok(replay(log, &run, |_| {})?.innovation_nll)
-}
-
-/// Stack of each thread of [`pool`], bytes.
-const STACK: usize = 64 << 20;
-
-/// The thread pool the grids run on (built on first use; `None` if the
-/// system refuses the threads: the grid then runs on the caller's
-/// thread).
-fn pool() -> Option<&'static rayon::ThreadPool> {
-    static POOL: std::sync::OnceLock<Option<rayon::ThreadPool>> = std::sync::OnceLock::new();
-    POOL.get_or_init(|| {
-        rayon::ThreadPoolBuilder::new()
-            .stack_size(STACK)
-            .thread_name(|i| format!("locus-replay-grid-{i}"))
-            .build()
-            .ok()
-    })
-    .as_ref()
-}
-
-/// The grid point of smallest NLL, and the whole grid's `(value, NLL)` (in
-/// the grid's order).
-fn grid_minimum(
-    grid: &[f64],
-    objective: impl Fn(f64) -> Result<f64, Error> + Sync,
-) -> Result<(f64, Vec<(f64, f64)>), Error> {
-    use rayon::prelude::*;
-    // The grid points are independent replays: run side by side, on a pool
-    // of their own whose threads have room for a replay's stack (the
-    // running filter's history is a large value; a caller's 2 MiB worker
-    // running these nested would overflow).
-    let run = || {
-        grid.par_iter()
-            .map(|&g| Ok((g, objective(g)?)))
-            .collect::<Result<Vec<(f64, f64)>, Error>>()
-    };
-    let tried = match pool() {
-        Some(p) => p.install(run)?,
-        None => grid
-            .iter()
-            .map(|&g| Ok((g, objective(g)?)))
-            .collect::<Result<Vec<(f64, f64)>, Error>>()?,
-    };
-    let best = tried
-        .iter()
-        .filter(|t| t.1.is_finite())
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map_or(grid[0], |t| t.0);
-    Ok((best, tried))
 }
 
 /// Seconds without a sighting that make the next one a post-gap sighting.
