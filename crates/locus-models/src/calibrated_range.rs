@@ -1,7 +1,7 @@
 //! Range alone to a known beacon or landmark from a sensor mounted on the
 //! robot, on the state of
 //! [`CalibratedUnicycle`](crate::calibrated_unicycle::CalibratedUnicycle)
-//! (`X = [x, y, theta, s_v, s_omega, b_omega, b_bearing]`):
+//! (`X = [x, y, theta, s_v, s_omega, b_omega, b_bearing, b_range]`):
 //!
 //! `h(X) = |l - s(X)|` (m),
 //!
@@ -11,7 +11,7 @@
 //! is the range row of [`RangeBearing`]'s:
 //!
 //! ```text
-//! H = [ -dx/r, -dy/r, -(dx px_t + dy py_t)/r, 0, 0, 0, 0 ]
+//! H = [ -dx/r, -dy/r, -(dx px_t + dy py_t)/r, 0, 0, 0, 0, 0 ]
 //! ```
 //!
 //! with `(dx, dy)` the landmark's offset from the sensor, `r` its length and
@@ -24,6 +24,7 @@
 use locus_core::nalgebra::{SMatrix, SVector};
 use locus_core::{MeasurementModel, Scalar};
 
+use crate::calibrated_unicycle::STATE;
 use crate::range_bearing::RangeBearing;
 
 /// Range alone from a mounted sensor: the landmark, the sensor's position
@@ -35,22 +36,22 @@ pub struct CalibratedRange<T: Scalar> {
     pub inner: RangeBearing<T>,
 }
 
-fn pose<T: Scalar>(x: &SVector<T, 7>) -> SVector<T, 3> {
+fn pose<T: Scalar>(x: &SVector<T, STATE>) -> SVector<T, 3> {
     SVector::<T, 3>::new(x[0], x[1], x[2])
 }
 
-impl<T: Scalar> MeasurementModel<T, 7, 1> for CalibratedRange<T> {
+impl<T: Scalar> MeasurementModel<T, STATE, 1> for CalibratedRange<T> {
     /// The range of [`RangeBearing`], `H` its first row on the pose.
     fn evaluate(
         &self,
-        x: &SVector<T, 7>,
-        jacobian: Option<&mut SMatrix<T, 1, 7>>,
+        x: &SVector<T, STATE>,
+        jacobian: Option<&mut SMatrix<T, 1, STATE>>,
     ) -> Option<SVector<T, 1>> {
         let mut h3 = SMatrix::<T, 2, 3>::zeros();
         let want = jacobian.is_some();
         let z = self.inner.evaluate(&pose(x), want.then_some(&mut h3))?;
         if let Some(j) = jacobian {
-            *j = SMatrix::<T, 1, 7>::zeros();
+            *j = SMatrix::<T, 1, STATE>::zeros();
             for c in 0..3 {
                 j[(0, c)] = h3[(0, c)];
             }
@@ -58,7 +59,7 @@ impl<T: Scalar> MeasurementModel<T, 7, 1> for CalibratedRange<T> {
         Some(SVector::<T, 1>::new(z[0]))
     }
 
-    fn noise(&self, _x: &SVector<T, 7>) -> SMatrix<T, 1, 1> {
+    fn noise(&self, _x: &SVector<T, STATE>) -> SMatrix<T, 1, 1> {
         SMatrix::<T, 1, 1>::new(self.inner.var_range)
     }
 }
@@ -73,13 +74,21 @@ mod tests {
         let at = |sensor: Vector2<f64>| CalibratedRange {
             inner: RangeBearing::new(Vector2::new(2.0, 0.0), sensor, 0.1, 1.0),
         };
-        let x = SVector::<f64, 7>::from([0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.3]);
+        let x = SVector::<f64, STATE>::from([0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.3, 0.0]);
         assert!((at(Vector2::zeros()).h(&x).unwrap()[0] - 2.0).abs() < 1e-12);
         assert!((at(Vector2::new(0.2, 0.0)).h(&x).unwrap()[0] - 1.8).abs() < 1e-12);
         // Turned by pi/2, the mount 0.2 m ahead is 0.2 m to the left:
         // sqrt(2^2 + 0.2^2) from the beacon.
-        let turned =
-            SVector::<f64, 7>::from([0.0, 0.0, core::f64::consts::FRAC_PI_2, 1.0, 1.0, 0.0, 0.0]);
+        let turned = SVector::<f64, STATE>::from([
+            0.0,
+            0.0,
+            core::f64::consts::FRAC_PI_2,
+            1.0,
+            1.0,
+            0.0,
+            0.0,
+            0.0,
+        ]);
         let r = at(Vector2::new(0.2, 0.0)).h(&turned).unwrap()[0];
         assert!((r - (4.0f64 + 0.04).sqrt()).abs() < 1e-12, "{r}");
         assert_eq!(at(Vector2::zeros()).noise(&x)[(0, 0)], 0.1 * 0.1);
@@ -90,6 +99,6 @@ mod tests {
         let m = CalibratedRange {
             inner: RangeBearing::new(Vector2::new(0.1, 0.0), Vector2::new(0.1, 0.0), 0.1, 1.0),
         };
-        assert!(m.h(&SVector::<f64, 7>::zeros()).is_none());
+        assert!(m.h(&SVector::<f64, STATE>::zeros()).is_none());
     }
 }

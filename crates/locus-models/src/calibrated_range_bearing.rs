@@ -12,7 +12,7 @@
 use locus_core::nalgebra::{SMatrix, SVector, Vector2};
 use locus_core::{MeasurementModel, Scalar, wrap_angle};
 
-use crate::calibrated_unicycle::BEARING_BIAS;
+use crate::calibrated_unicycle::{BEARING_BIAS, STATE};
 use crate::range_bearing::RangeBearing;
 
 /// Range and bearing from a mounted sensor, with a bearing bias state.
@@ -25,24 +25,24 @@ pub struct CalibratedRangeBearing<T: Scalar> {
     pub yaw: T,
 }
 
-fn pose<T: Scalar>(x: &SVector<T, 7>) -> SVector<T, 3> {
+fn pose<T: Scalar>(x: &SVector<T, STATE>) -> SVector<T, 3> {
     SVector::<T, 3>::new(x[0], x[1], x[2])
 }
 
-impl<T: Scalar> MeasurementModel<T, 7, 2> for CalibratedRangeBearing<T> {
+impl<T: Scalar> MeasurementModel<T, STATE, 2> for CalibratedRangeBearing<T> {
     /// [`RangeBearing`] on the pose, the bearing less the sensor's yaw
     /// plus the bearing bias; `H` its Jacobian on the pose and 1 on the
     /// bias.
     fn evaluate(
         &self,
-        x: &SVector<T, 7>,
-        jacobian: Option<&mut SMatrix<T, 2, 7>>,
+        x: &SVector<T, STATE>,
+        jacobian: Option<&mut SMatrix<T, 2, STATE>>,
     ) -> Option<SVector<T, 2>> {
         let mut h3 = SMatrix::<T, 2, 3>::zeros();
         let want = jacobian.is_some();
         let z = self.inner.evaluate(&pose(x), want.then_some(&mut h3))?;
         if let Some(j) = jacobian {
-            *j = SMatrix::<T, 2, 7>::zeros();
+            *j = SMatrix::<T, 2, STATE>::zeros();
             for r in 0..2 {
                 for c in 0..3 {
                     j[(r, c)] = h3[(r, c)];
@@ -56,7 +56,7 @@ impl<T: Scalar> MeasurementModel<T, 7, 2> for CalibratedRangeBearing<T> {
         ))
     }
 
-    fn noise(&self, x: &SVector<T, 7>) -> SMatrix<T, 2, 2> {
+    fn noise(&self, x: &SVector<T, STATE>) -> SMatrix<T, 2, 2> {
         self.inner.noise(&pose(x))
     }
 
@@ -77,8 +77,8 @@ mod tests {
             yaw: 0.1,
         };
         for x in [
-            SVector::<f64, 7>::from([0.0, 0.0, 0.3, 1.0, 1.0, 0.0, 0.02]),
-            SVector::<f64, 7>::from([5.0, 2.0, -2.5, 1.1, 0.9, 0.01, -0.03]),
+            SVector::<f64, STATE>::from([0.0, 0.0, 0.3, 1.0, 1.0, 0.0, 0.02, 0.0]),
+            SVector::<f64, STATE>::from([5.0, 2.0, -2.5, 1.1, 0.9, 0.01, -0.03, 0.0]),
         ] {
             assert!(check_measurement_model(&m, &x, 1e-6, 1e-6).unwrap());
         }
@@ -90,7 +90,7 @@ mod tests {
             inner: RangeBearing::new(Vector2::new(2.0, 0.0), sensor, 0.1, 0.01),
             yaw,
         };
-        let x = SVector::<f64, 7>::from([0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0]);
+        let x = SVector::<f64, STATE>::from([0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0]);
         let centred = at(Vector2::zeros(), 0.0).h(&x).unwrap();
         let ahead = at(Vector2::new(0.2, 0.0), 0.0).h(&x).unwrap();
         assert!((centred[0] - 2.0).abs() < 1e-12);

@@ -3,9 +3,9 @@
 //! factor and whose turn rate has a bias, and whose landmark sensor reads
 //! bearings with a bias.
 //!
-//! State `[x, y, theta, s_v, s_omega, b_omega, b_bearing]` (m, m, rad, -, -,
-//! rad/s, rad). The pose moves as [`Unicycle`] with the effective
-//! velocities
+//! State `[x, y, theta, s_v, s_omega, b_omega, b_bearing, b_range]` (m, m,
+//! rad, -, -, rad/s, rad, m). The pose moves as [`Unicycle`] with the
+//! effective velocities
 //!
 //! `v_e = s_v v + q_v`, `omega_e = s_omega omega + b_omega + q_omega`,
 //!
@@ -17,6 +17,16 @@
 //! floor changing) and never becomes certain of a value for good. The
 //! bearing bias does not move the robot; it is read by
 //! [`CalibratedRangeBearing`](crate::calibrated_range_bearing::CalibratedRangeBearing).
+//!
+//! The range bias `b_range` is the part of a beam sensor's range error that
+//! persists from reading to reading (read by
+//! [`PlanarBeam`](crate::planar_beam::PlanarBeam)): a first-order
+//! Gauss-Markov process of stationary standard deviation `sigma` and time
+//! constant `tau` ([`GaussMarkov`]), `b_k = phi b_(k-1) + w`,
+//! `phi = exp(-dt / tau)`, `var(w) = sigma^2 (1 - phi^2)`, the exact
+//! discretisation (Gelb, "Applied Optimal Estimation", 1974, section
+//! 3.8, the shaping filter for correlated measurement noise). With `tau`
+//! infinite it is a constant: `phi = 1`, no noise.
 //!
 //! This is the classic state augmentation for sensor and odometry
 //! calibration (e.g. Roumeliotis and Bekey, "3-D localization for a Mars
@@ -37,6 +47,38 @@ pub const OMEGA_SCALE: usize = 4;
 pub const OMEGA_BIAS: usize = 5;
 /// Index of the bearing bias (rad) in the state.
 pub const BEARING_BIAS: usize = 6;
+/// Index of the beam sensors' range bias (m) in the state.
+pub const RANGE_BIAS: usize = 7;
+/// Dimension of the state.
+pub const STATE: usize = 8;
+/// Dimension of the process noise: the two velocity noises, the four
+/// calibration walks and the range bias's driving noise.
+pub const NOISE: usize = 7;
+
+/// A first-order Gauss-Markov process: stationary standard deviation
+/// `sigma` and time constant `tau` (s; infinite: a constant).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GaussMarkov<T: Scalar> {
+    /// Stationary standard deviation (the unit of the state).
+    pub sigma: T,
+    /// Time constant, s (> 0; infinite for a constant).
+    pub tau: T,
+}
+
+impl<T: Scalar> GaussMarkov<T> {
+    /// The factor `phi = exp(-dt / tau)` over `dt` (s).
+    #[inline]
+    pub fn decay(&self, dt: T) -> T {
+        (-dt / self.tau).exp()
+    }
+
+    /// The driving noise's variance over `dt`: `sigma^2 (1 - phi^2)`.
+    #[inline]
+    pub fn step_variance(&self, dt: T) -> T {
+        let phi = self.decay(dt);
+        self.sigma * self.sigma * (T::one() - phi * phi)
+    }
+}
 
 /// The unicycle with scale factors and biases as states (see the module
 /// documentation). Input: the logged [`Velocities`] over `dt`.
@@ -49,13 +91,15 @@ pub struct CalibratedUnicycle<T: Scalar> {
     /// Random-walk power spectral densities of `s_v` (1/s), `s_omega`
     /// (1/s), `b_omega` (rad^2/s^3) and `b_bearing` (rad^2/s).
     pub walk: [T; 4],
+    /// The range bias's process (m, s).
+    pub range_bias: GaussMarkov<T>,
 }
 
 impl<T: Scalar> CalibratedUnicycle<T> {
     /// The pose model at the effective velocities of `x`'s calibration, and
     /// those velocities.
     #[inline]
-    fn effective(&self, x: &SVector<T, 7>, u: &Velocities<T>) -> Velocities<T> {
+    fn effective(&self, x: &SVector<T, STATE>, u: &Velocities<T>) -> Velocities<T> {
         Velocities {
             v: x[V_SCALE] * u.v,
             omega: x[OMEGA_SCALE] * u.omega + x[OMEGA_BIAS],
@@ -63,7 +107,7 @@ impl<T: Scalar> CalibratedUnicycle<T> {
         }
     }
 
-    fn pose(x: &SVector<T, 7>) -> SVector<T, 3> {
+    fn pose(x: &SVector<T, STATE>) -> SVector<T, 3> {
         SVector::<T, 3>::new(x[0], x[1], x[2])
     }
 }
@@ -73,34 +117,35 @@ impl<T: Scalar> CalibratedUnicycle<T> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Propagation<T: Scalar> {
     /// The predicted mean `f(x, u, 0)`.
-    pub x: SVector<T, 7>,
+    pub x: SVector<T, STATE>,
     /// The predicted covariance `A P A^T + W Q W^T` (exactly symmetric).
-    pub p: SMatrix<T, 7, 7>,
+    pub p: SMatrix<T, STATE, STATE>,
     /// The state Jacobian `A`.
-    pub a: SMatrix<T, 7, 7>,
+    pub a: SMatrix<T, STATE, STATE>,
     /// The product `A P`.
-    pub ap: SMatrix<T, 7, 7>,
+    pub ap: SMatrix<T, STATE, STATE>,
 }
 
 impl<T: Scalar> CalibratedUnicycle<T> {
     /// [`MotionModel::propagate`] (which is this without the by-products)
     /// with `A` and `A P` as well, from one linearisation: `A` is the
     /// identity except the pose rows, which reach only heading and
-    /// calibration columns; `W` maps the two velocity noises into the pose
-    /// and each random walk onto its own state. About a sixth of the dense
-    /// products' work.
+    /// calibration columns, and the range bias's decay on its diagonal;
+    /// `W` maps the two velocity noises into the pose and each random walk
+    /// and the bias's driving noise onto its own state. About a sixth of
+    /// the dense products' work.
     #[inline]
     pub fn propagate_linearized(
         &self,
-        x: &SVector<T, 7>,
+        x: &SVector<T, STATE>,
         u: &Velocities<T>,
-        p: &SMatrix<T, 7, 7>,
+        p: &SMatrix<T, STATE, STATE>,
     ) -> Propagation<T> {
         let (fx, a, w) = self.linearize(x, u);
         // B = A P: rows 0-2 are P's plus their off-identity terms.
         let mut b = *p;
         for r in 0..3 {
-            for c in 0..7 {
+            for c in 0..STATE {
                 let mut v = p[(r, c)];
                 for k in 2..=OMEGA_BIAS {
                     if k != r {
@@ -110,10 +155,14 @@ impl<T: Scalar> CalibratedUnicycle<T> {
                 b[(r, c)] = v;
             }
         }
+        let phi = a[(RANGE_BIAS, RANGE_BIAS)];
+        for c in 0..STATE {
+            b[(RANGE_BIAS, c)] = phi * p[(RANGE_BIAS, c)];
+        }
         // P- = B A^T: columns 0-2 likewise; then symmetric by construction
         // of the lower triangle mirrored.
         let mut out = b;
-        for r in 0..7 {
+        for r in 0..STATE {
             for c in 0..3 {
                 let mut v = b[(r, c)];
                 for k in 2..=OMEGA_BIAS {
@@ -124,6 +173,9 @@ impl<T: Scalar> CalibratedUnicycle<T> {
                 out[(r, c)] = v;
             }
         }
+        // Columns 3-6 of A are the identity's; column 7 is the decay (the
+        // lower triangle's only entry off it is the diagonal).
+        out[(RANGE_BIAS, RANGE_BIAS)] = phi * b[(RANGE_BIAS, RANGE_BIAS)];
         // W Q W^T: the velocity noises into the pose block, the walks on
         // the calibration diagonal.
         let q = self.noise_cov(u);
@@ -136,9 +188,10 @@ impl<T: Scalar> CalibratedUnicycle<T> {
         for i in 0..4 {
             out[(V_SCALE + i, V_SCALE + i)] += q[(2 + i, 2 + i)];
         }
+        out[(RANGE_BIAS, RANGE_BIAS)] += q[(6, 6)];
         // Exactly symmetric: the upper triangle from the lower.
-        for r in 0..7 {
-            for c in (r + 1)..7 {
+        for r in 0..STATE {
+            for c in (r + 1)..STATE {
                 out[(r, c)] = out[(c, r)];
             }
         }
@@ -156,7 +209,7 @@ fn pose_model<T: Scalar>() -> Unicycle<T> {
     Unicycle::new(T::zero(), T::zero())
 }
 
-impl<T: Scalar> MotionModel<T, 7, 6> for CalibratedUnicycle<T> {
+impl<T: Scalar> MotionModel<T, STATE, NOISE> for CalibratedUnicycle<T> {
     type Input = Velocities<T>;
 
     /// The pose model at the effective velocities, the calibration held
@@ -165,11 +218,11 @@ impl<T: Scalar> MotionModel<T, 7, 6> for CalibratedUnicycle<T> {
     /// act through the effective velocities.
     fn evaluate(
         &self,
-        x: &SVector<T, 7>,
+        x: &SVector<T, STATE>,
         u: &Velocities<T>,
-        q: &SVector<T, 6>,
-        jacobians: Option<&mut MotionJacobians<T, 7, 6>>,
-    ) -> SVector<T, 7> {
+        q: &SVector<T, NOISE>,
+        jacobians: Option<&mut MotionJacobians<T, STATE, NOISE>>,
+    ) -> SVector<T, STATE> {
         let e = self.effective(x, u);
         // `g` = d pose / d(v_e, omega_e), the pose model's noise Jacobian.
         let mut pose_jacobians = MotionJacobians::<T, 3, 2>::zeros();
@@ -187,10 +240,12 @@ impl<T: Scalar> MotionModel<T, 7, 6> for CalibratedUnicycle<T> {
             out[V_SCALE + i] += q[2 + i];
         }
         out[BEARING_BIAS] = wrap_angle(out[BEARING_BIAS]);
+        let phi = self.range_bias.decay(u.dt);
+        out[RANGE_BIAS] = phi * x[RANGE_BIAS] + q[6];
         if let Some(j) = jacobians {
             let (a3, g) = (pose_jacobians.a, pose_jacobians.w);
-            j.a = SMatrix::<T, 7, 7>::identity();
-            j.w = SMatrix::<T, 7, 6>::zeros();
+            j.a = SMatrix::<T, STATE, STATE>::identity();
+            j.w = SMatrix::<T, STATE, NOISE>::zeros();
             for r in 0..3 {
                 for c in 0..3 {
                     j.a[(r, c)] = a3[(r, c)];
@@ -204,17 +259,20 @@ impl<T: Scalar> MotionModel<T, 7, 6> for CalibratedUnicycle<T> {
             for i in 0..4 {
                 j.w[(V_SCALE + i, 2 + i)] = T::one();
             }
+            j.a[(RANGE_BIAS, RANGE_BIAS)] = phi;
+            j.w[(RANGE_BIAS, 6)] = T::one();
         }
         out
     }
 
-    fn noise_cov(&self, u: &Velocities<T>) -> SMatrix<T, 6, 6> {
-        let mut q = SMatrix::<T, 6, 6>::zeros();
+    fn noise_cov(&self, u: &Velocities<T>) -> SMatrix<T, NOISE, NOISE> {
+        let mut q = SMatrix::<T, NOISE, NOISE>::zeros();
         q[(0, 0)] = self.psd_v / u.dt;
         q[(1, 1)] = self.psd_omega / u.dt;
         for i in 0..4 {
             q[(2 + i, 2 + i)] = self.walk[i] * u.dt;
         }
+        q[(6, 6)] = self.range_bias.step_variance(u.dt);
         q
     }
 
@@ -227,15 +285,15 @@ impl<T: Scalar> MotionModel<T, 7, 6> for CalibratedUnicycle<T> {
     #[inline]
     fn propagate(
         &self,
-        x: &SVector<T, 7>,
+        x: &SVector<T, STATE>,
         u: &Velocities<T>,
-        p: &SMatrix<T, 7, 7>,
-    ) -> (SVector<T, 7>, SMatrix<T, 7, 7>) {
+        p: &SMatrix<T, STATE, STATE>,
+    ) -> (SVector<T, STATE>, SMatrix<T, STATE, STATE>) {
         let step = self.propagate_linearized(x, u, p);
         (step.x, step.p)
     }
 
-    fn state_residual(&self, a: &SVector<T, 7>, b: &SVector<T, 7>) -> SVector<T, 7> {
+    fn state_residual(&self, a: &SVector<T, STATE>, b: &SVector<T, STATE>) -> SVector<T, STATE> {
         let mut d = a - b;
         d[2] = wrap_angle(d[2]);
         d[BEARING_BIAS] = wrap_angle(d[BEARING_BIAS]);
@@ -253,6 +311,10 @@ mod tests {
             psd_v: 0.01,
             psd_omega: 0.02,
             walk: [1e-6, 2e-6, 3e-7, 4e-8],
+            range_bias: GaussMarkov {
+                sigma: 0.02,
+                tau: 3.0,
+            },
         }
     }
 
@@ -261,7 +323,7 @@ mod tests {
         let m = model();
         for (x, u) in [
             (
-                SVector::<f64, 7>::from([1.0, -2.0, 0.7, 1.1, 0.8, 0.02, -0.01]),
+                SVector::<f64, STATE>::from([1.0, -2.0, 0.7, 1.1, 0.8, 0.02, -0.01, 0.01]),
                 Velocities {
                     v: 0.3,
                     omega: 0.5,
@@ -269,7 +331,7 @@ mod tests {
                 },
             ),
             (
-                SVector::<f64, 7>::from([0.0, 0.0, -3.0, 0.9, 1.2, -0.05, 0.03]),
+                SVector::<f64, STATE>::from([0.0, 0.0, -3.0, 0.9, 1.2, -0.05, 0.03, -0.02]),
                 Velocities {
                     v: -0.2,
                     omega: 1e-4,
@@ -277,7 +339,7 @@ mod tests {
                 },
             ),
             (
-                SVector::<f64, 7>::from([5.0, 1.0, 2.9, 1.0, 1.0, 0.0, 0.0]),
+                SVector::<f64, STATE>::from([5.0, 1.0, 2.9, 1.0, 1.0, 0.0, 0.0, 0.0]),
                 Velocities {
                     v: 0.0,
                     omega: -2.0,
@@ -286,7 +348,7 @@ mod tests {
             ),
         ] {
             check_motion_model(&m, &x, &u, 1e-6, 1e-6).unwrap();
-            let mut p = SMatrix::<f64, 7, 7>::identity() * 0.01;
+            let mut p = SMatrix::<f64, STATE, STATE>::identity() * 0.01;
             p[(0, 2)] = 0.003;
             p[(2, 0)] = 0.003;
             check_propagate(&m, &x, &u, &p, 1e-12).unwrap();
@@ -297,10 +359,36 @@ mod tests {
         }
     }
 
+    /// The range bias decays by `exp(-dt/tau)` and its variance tends to
+    /// `sigma^2`; with `tau` infinite it and its variance stay as they are.
+    #[test]
+    fn the_range_bias_is_a_gauss_markov_process() {
+        let mut m = model();
+        let u = Velocities {
+            v: 0.3,
+            omega: 0.1,
+            dt: 0.5,
+        };
+        let mut x = SVector::<f64, STATE>::from([0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.04]);
+        let y = m.f(&x, &u, &SVector::zeros());
+        assert!((y[RANGE_BIAS] - 0.04 * (-0.5f64 / 3.0).exp()).abs() < 1e-15);
+        let mut p = SMatrix::<f64, STATE, STATE>::identity() * 1e-4;
+        for _ in 0..200 {
+            p = m.propagate_linearized(&x, &u, &p).p;
+        }
+        assert!((p[(RANGE_BIAS, RANGE_BIAS)] - 0.02f64.powi(2)).abs() < 1e-9);
+        m.range_bias.tau = f64::INFINITY;
+        x[RANGE_BIAS] = 0.04;
+        let p0 = SMatrix::<f64, STATE, STATE>::identity() * 1e-4;
+        let step = m.propagate_linearized(&x, &u, &p0);
+        assert_eq!(step.x[RANGE_BIAS], 0.04);
+        assert_eq!(step.p[(RANGE_BIAS, RANGE_BIAS)], 1e-4);
+    }
+
     #[test]
     fn unit_calibration_moves_as_the_plain_unicycle() {
         let m = model();
-        let x = SVector::<f64, 7>::from([1.0, 2.0, 0.3, 1.0, 1.0, 0.0, 0.0]);
+        let x = SVector::<f64, STATE>::from([1.0, 2.0, 0.3, 1.0, 1.0, 0.0, 0.0, 0.0]);
         let u = Velocities {
             v: 0.4,
             omega: -0.6,
@@ -320,7 +408,7 @@ mod tests {
     #[test]
     fn scale_and_bias_change_the_motion_as_stated() {
         let m = model();
-        let x = SVector::<f64, 7>::from([0.0, 0.0, 0.0, 0.5, 1.0, 0.1, 0.0]);
+        let x = SVector::<f64, STATE>::from([0.0, 0.0, 0.0, 0.5, 1.0, 0.1, 0.0, 0.0]);
         let u = Velocities {
             v: 1.0,
             omega: 0.0,

@@ -1,7 +1,7 @@
 //! One beam of a range sensor (an IR sensor, a laser rangefinder, one beam
 //! of a lidar) against a locally planar surface, on the state of
 //! [`CalibratedUnicycle`](crate::calibrated_unicycle::CalibratedUnicycle)
-//! (`X = [x, y, theta, s_v, s_omega, b_omega, b_bearing]`); papers 000 and
+//! (`X = [x, y, theta, s_v, s_omega, b_omega, b_bearing, b_range]`); papers 000 and
 //! 003 correct each such range as one scalar update.
 //!
 //! The surface is the one the beam hit when it was cast in the map from the
@@ -12,17 +12,18 @@
 //! (`yaw` the sensor's mount yaw, `a` the beam's angle on the sensor, rad).
 //! Its range to the plane through `p` with normal `n` is
 //!
-//! `h(X) = n.(p - o) / (n.d)` (m)
+//! `h(X) = n.(p - o) / (n.d) + b_range` (m)
 //!
 //! (paper 000's eq. 9 for a wall line, with the wall moved to the hit's
-//! plane), and its Jacobian, with `o_t = dR/dtheta m` and
-//! `d_t = (-sin phi, cos phi)`,
+//! plane, plus the range bias that persists from reading to reading), and
+//! its Jacobian, with `o_t = dR/dtheta m` and `d_t = (-sin phi, cos phi)`,
 //!
 //! ```text
-//! H = [ -n_x/(n.d), -n_y/(n.d), -(n.o_t + h n.d_t)/(n.d), 0, 0, 0, 0 ].
+//! H = [ -n_x/(n.d), -n_y/(n.d), -(n.o_t + h n.d_t)/(n.d), 0, 0, 0, 0, 1 ].
 //! ```
 //!
-//! The calibration states do not enter a beam. Noise `R = sigma^2` (m^2).
+//! The odometry and bearing calibration states do not enter a beam. Noise
+//! `R = sigma^2` (m^2), the reading's own (white) part.
 //! Valid domain: the beam meets the plane from its front at an incidence
 //! (the angle between `-d` and `n`) of at most `max_incidence`, at a range
 //! of at least `min_range`; else `h` is `None` (a grazing beam's range is
@@ -31,6 +32,8 @@
 
 use locus_core::nalgebra::{SMatrix, SVector, Vector2};
 use locus_core::{MeasurementModel, Scalar};
+
+use crate::calibrated_unicycle::{RANGE_BIAS, STATE};
 
 /// A beam's mount on the robot: position (robot frame, m) and direction
 /// (the sensor's yaw plus the beam's angle on it, rad, counter-clockwise
@@ -64,7 +67,7 @@ pub struct PlanarBeam<T: Scalar> {
 impl<T: Scalar> PlanarBeam<T> {
     /// The beam's origin and direction in the world at the pose
     /// `(x, y, theta)`, and their derivatives by `theta`.
-    fn ray(&self, x: &SVector<T, 7>) -> [Vector2<T>; 4] {
+    fn ray(&self, x: &SVector<T, STATE>) -> [Vector2<T>; 4] {
         let (s, c) = x[2].sin_cos();
         let m = self.mount.position;
         let o = Vector2::new(x[0] + c * m.x - s * m.y, x[1] + s * m.x + c * m.y);
@@ -74,11 +77,11 @@ impl<T: Scalar> PlanarBeam<T> {
     }
 }
 
-impl<T: Scalar> MeasurementModel<T, 7, 1> for PlanarBeam<T> {
+impl<T: Scalar> MeasurementModel<T, STATE, 1> for PlanarBeam<T> {
     fn evaluate(
         &self,
-        x: &SVector<T, 7>,
-        jacobian: Option<&mut SMatrix<T, 1, 7>>,
+        x: &SVector<T, STATE>,
+        jacobian: Option<&mut SMatrix<T, 1, STATE>>,
     ) -> Option<SVector<T, 1>> {
         let [o, o_t, d, d_t] = self.ray(x);
         let n = self.normal;
@@ -90,16 +93,18 @@ impl<T: Scalar> MeasurementModel<T, 7, 1> for PlanarBeam<T> {
         if !(facing && h >= self.min_range) {
             return None;
         }
+        let bias = x[RANGE_BIAS];
         if let Some(j) = jacobian {
-            *j = SMatrix::<T, 1, 7>::zeros();
+            *j = SMatrix::<T, 1, STATE>::zeros();
             j[(0, 0)] = -n.x / nd;
             j[(0, 1)] = -n.y / nd;
             j[(0, 2)] = -(n.dot(&o_t) + h * n.dot(&d_t)) / nd;
+            j[(0, RANGE_BIAS)] = T::one();
         }
-        Some(SVector::<T, 1>::new(h))
+        Some(SVector::<T, 1>::new(h + bias))
     }
 
-    fn noise(&self, _x: &SVector<T, 7>) -> SMatrix<T, 1, 1> {
+    fn noise(&self, _x: &SVector<T, STATE>) -> SMatrix<T, 1, 1> {
         SMatrix::<T, 1, 1>::new(self.var_range)
     }
 }
@@ -126,7 +131,7 @@ mod tests {
 
     #[test]
     fn the_range_is_the_distance_along_the_beam_to_the_plane() {
-        let x = SVector::<f64, 7>::from([0.5, -0.2, 0.1, 1.0, 1.0, 0.0, 0.0]);
+        let x = SVector::<f64, STATE>::from([0.5, -0.2, 0.1, 1.0, 1.0, 0.0, 0.0, 0.0]);
         let b = beam();
         let r = b.h(&x).unwrap()[0];
         let [o, _, d, _] = b.ray(&x);
@@ -140,8 +145,12 @@ mod tests {
             },
             ..b
         };
-        let at = SVector::<f64, 7>::from([1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0]);
+        let at = SVector::<f64, STATE>::from([1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0]);
         assert!((straight.h(&at).unwrap()[0] - 2.0).abs() < 1e-12);
+        // A range bias adds to the reading as it is.
+        let mut biased = at;
+        biased[RANGE_BIAS] = 0.03;
+        assert!((straight.h(&biased).unwrap()[0] - 2.03).abs() < 1e-12);
         assert_eq!(b.noise(&x)[(0, 0)], 0.01);
     }
 
@@ -149,14 +158,14 @@ mod tests {
     fn the_jacobian_matches_central_differences() {
         let b = beam();
         for x in [
-            [0.5, -0.2, 0.1, 1.0, 1.0, 0.0, 0.0],
-            [1.5, 0.4, -0.6, 1.1, 0.9, 0.01, 0.02],
-            [-1.0, 2.0, 0.7, 1.0, 1.0, 0.0, 0.0],
+            [0.5, -0.2, 0.1, 1.0, 1.0, 0.0, 0.0, 0.0],
+            [1.5, 0.4, -0.6, 1.1, 0.9, 0.01, 0.02, 0.03],
+            [-1.0, 2.0, 0.7, 1.0, 1.0, 0.0, 0.0, -0.05],
         ] {
-            let x = SVector::<f64, 7>::from(x);
-            let mut j = SMatrix::<f64, 1, 7>::zeros();
+            let x = SVector::<f64, STATE>::from(x);
+            let mut j = SMatrix::<f64, 1, STATE>::zeros();
             b.evaluate(&x, Some(&mut j)).unwrap();
-            for k in 0..7 {
+            for k in 0..STATE {
                 let e = 1e-6;
                 let mut hi = x;
                 let mut lo = x;
@@ -176,16 +185,16 @@ mod tests {
     fn grazing_backward_and_too_short_beams_have_no_range() {
         let b = beam();
         // Heading 1.3 rad + 0.2: the beam runs almost along the wall.
-        let grazing = SVector::<f64, 7>::from([0.5, 0.0, 1.3, 1.0, 1.0, 0.0, 0.0]);
+        let grazing = SVector::<f64, STATE>::from([0.5, 0.0, 1.3, 1.0, 1.0, 0.0, 0.0, 0.0]);
         assert!(b.h(&grazing).is_none());
         // Looking away from the wall.
-        let away = SVector::<f64, 7>::from([0.5, 0.0, 3.0, 1.0, 1.0, 0.0, 0.0]);
+        let away = SVector::<f64, STATE>::from([0.5, 0.0, 3.0, 1.0, 1.0, 0.0, 0.0, 0.0]);
         assert!(b.h(&away).is_none());
         // Behind the plane (x = 4 > 3), looking at it from its back.
-        let behind = SVector::<f64, 7>::from([4.0, 0.0, 3.0, 1.0, 1.0, 0.0, 0.0]);
+        let behind = SVector::<f64, STATE>::from([4.0, 0.0, 3.0, 1.0, 1.0, 0.0, 0.0, 0.0]);
         assert!(b.h(&behind).is_none());
         // 0.01 m from the wall, below min_range.
-        let close = SVector::<f64, 7>::from([2.89, -0.05, 0.0, 1.0, 1.0, 0.0, 0.0]);
+        let close = SVector::<f64, STATE>::from([2.89, -0.05, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0]);
         assert!(b.h(&close).is_none(), "{:?}", b.h(&close));
     }
 }

@@ -23,6 +23,7 @@ use locus_core::nalgebra::SVector;
 use locus_core::nalgebra::{Vector2, Vector3};
 use locus_core::{MeasurementModel, MotionModel};
 use locus_models::calibrated_range::CalibratedRange;
+use locus_models::calibrated_unicycle::STATE;
 use locus_models::range_bearing::RangeBearing;
 use locus_models::tricycle::{
     CountNoise, FrontReading, RearCounts, TricycleFront, TricycleRear, counts_per_rev,
@@ -120,7 +121,7 @@ proptest! {
         let base = RangeBearing::new(Vector2::zeros(), Vector2::new(sx, sy), 0.05, 1.0);
         let (p, _) = base.sensor_world(&Vector3::new(x, y, th));
         let model = CalibratedRange { inner: base.with_landmark(p + range * Vector2::new(dir.cos(), dir.sin())) };
-        let state = SVector::<f64, 7>::from([x, y, th, s_v, s_omega, b_omega, b_bearing]);
+        let state = SVector::<f64, STATE>::from([x, y, th, s_v, s_omega, b_omega, b_bearing, 0.0]);
         let checked = check_measurement_model(&model, &state, DEFAULT_STEP, DEFAULT_TOLERANCE);
         prop_assert_eq!(checked, Ok(true));
     }

@@ -1,6 +1,6 @@
 //! The parameters of a replay and their checks.
 
-use locus_models::calibrated_unicycle::CalibratedUnicycle;
+use locus_models::calibrated_unicycle::{CalibratedUnicycle, GaussMarkov};
 
 use locus_models::plausible::Limits;
 
@@ -87,6 +87,21 @@ pub struct Beams {
     /// many standard deviations of the innovation is taken for something
     /// not in the map (a person, a chair) and skipped (> 0).
     pub short_sigma: f64,
+    /// The part of the range error that persists from scan to scan, shared
+    /// by the beams of a scan: a Gauss-Markov range bias in the state
+    /// (`locus_models::calibrated_unicycle`), started at 0 with its
+    /// stationary standard deviation `sigma` (m, > 0) and time constant
+    /// `tau` (s, > 0; infinite: a constant). Default: held at 0 (`sigma`
+    /// 1e-6 m, `tau` infinite), the beams' errors taken as white.
+    pub bias: GaussMarkov<f64>,
+}
+
+impl Beams {
+    /// The range bias held at 0: the beams' errors taken as white.
+    pub const HELD_BIAS: GaussMarkov<f64> = GaussMarkov {
+        sigma: 1e-6,
+        tau: f64::INFINITY,
+    };
 }
 
 impl Default for Beams {
@@ -96,6 +111,7 @@ impl Default for Beams {
             per_scan: 30,
             max_incidence: 1.2,
             short_sigma: 3.0,
+            bias: Beams::HELD_BIAS,
         }
     }
 }
@@ -197,6 +213,7 @@ impl Config {
             psd_v: self.q_v,
             psd_omega: self.q_omega,
             walk: self.calibration.walk,
+            range_bias: self.beams.bias,
         }
     }
 
@@ -292,6 +309,14 @@ impl Config {
             (
                 positive(self.beams.short_sigma),
                 "the beams' short-reading bound must be finite and > 0",
+            ),
+            (
+                positive(self.beams.bias.sigma) && self.beams.bias.sigma <= 1e5,
+                "the range bias's sigma must be finite, > 0 and at most 1e5 m",
+            ),
+            (
+                self.beams.bias.tau > 0.0,
+                "the range bias's time constant must be > 0 s (infinite: a constant)",
             ),
         ];
         if let Err(what) = self.limits.validate() {

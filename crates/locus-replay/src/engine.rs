@@ -18,7 +18,9 @@ use locus_core::{
 };
 use locus_eval::Tally;
 use locus_logs::mrclam::{Odometry, TruthCursor};
-use locus_models::calibrated_unicycle::{BEARING_BIAS, OMEGA_BIAS, OMEGA_SCALE, V_SCALE};
+use locus_models::calibrated_unicycle::{
+    BEARING_BIAS, OMEGA_BIAS, OMEGA_SCALE, RANGE_BIAS, V_SCALE,
+};
 
 use crate::event::{Entry, Event, ScanRef};
 use crate::filter::{
@@ -113,6 +115,7 @@ impl<'a> Engine<'a> {
         x[OMEGA_BIAS] = cfg.calibration.initial[2];
         x[BEARING_BIAS] = cfg.calibration.initial[3];
         let [cv, cw, cb, cz] = cfg.calibration.std;
+        let cr = cfg.beams.bias.sigma;
         let mut p = StateMatrix::from_diagonal(&StateVector::from([
             0.0,
             0.0,
@@ -121,6 +124,7 @@ impl<'a> Engine<'a> {
             cw * cw,
             cb * cb,
             cz * cz,
+            cr * cr,
         ]));
         p.fixed_view_mut::<3, 3>(0, 0).copy_from(&pose_covariance);
         let belief = Belief::new(x, p);
@@ -131,10 +135,12 @@ impl<'a> Engine<'a> {
             );
         }
         // The inflation leaves alone the calibration states the model holds
-        // constant (no random walk): only the pose and what drifts may grow.
+        // constant (no random walk), and the range bias, whose spread its
+        // process bounds: only the pose and what drifts may grow.
         let held: Vec<usize> = (0..4)
             .filter(|&i| cfg.calibration.walk[i] == 0.0)
             .map(|i| V_SCALE + i)
+            .chain([RANGE_BIAS])
             .collect();
         let recovery = Recovery::new(cfg.recover_after, cfg.inflation)
             .and_then(|r| r.holding(&held))

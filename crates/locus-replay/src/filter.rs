@@ -1,10 +1,11 @@
 //! The replay's filter and how one event is applied to it.
 //!
-//! The state ([`STATE`] = 7) is the pose `x`, `y` (m), `theta` (rad) and
+//! The state ([`STATE`] = 8) is the pose `x`, `y` (m), `theta` (rad) and
 //! the calibration of
 //! [`CalibratedUnicycle`](locus_models::calibrated_unicycle::CalibratedUnicycle):
 //! speed scale `s_v`, turn-rate scale `s_omega`, turn-rate bias `b_omega`
-//! (rad/s), bearing bias `b_bearing` (rad). The running filter's track
+//! (rad/s), bearing bias `b_bearing` (rad), and the beams' range bias
+//! `b_range` (m). The running filter's track
 //! carries beside it the input in force and dead reckoning ([`Carried`]);
 //! its history holds at most [`HISTORY`] events.
 //!
@@ -49,9 +50,10 @@ pub(crate) struct Carried {
     pub(crate) dead: Vector3<f64>,
 }
 
-/// Dimension of the replay's state: the pose and the calibration of
+/// Dimension of the replay's state: the pose, the calibration and the range
+/// bias of
 /// [`CalibratedUnicycle`](locus_models::calibrated_unicycle::CalibratedUnicycle).
-pub const STATE: usize = 7;
+pub use locus_models::calibrated_unicycle::STATE;
 
 /// The replay's state vector and covariance.
 pub type StateVector = SVector<f64, STATE>;

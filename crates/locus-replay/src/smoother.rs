@@ -261,6 +261,10 @@ mod tests {
             psd_v: q,
             psd_omega: 0.1,
             walk: [1e-3; 4],
+            range_bias: locus_models::calibrated_unicycle::GaussMarkov {
+                sigma: 0.1,
+                tau: 2.0,
+            },
         };
         let z = [1.0, 1.4, 0.7, 2.0, 1.1, 0.4];
         let n = z.len();
