@@ -259,6 +259,17 @@ impl Groundtruth {
         &self.poses
     }
 
+    /// The track with every time moved by `seconds` (a truth whose clock
+    /// runs `-seconds` behind the robot's put on the robot's).
+    #[must_use]
+    pub fn shifted(&self, seconds: f64) -> Self {
+        let mut track = self.clone();
+        for p in &mut track.poses {
+            p.time += seconds;
+        }
+        track
+    }
+
     /// First and last time, s; `None` if empty.
     pub fn span(&self) -> Option<(f64, f64)> {
         Some((self.poses.first()?.time, self.poses.last()?.time))

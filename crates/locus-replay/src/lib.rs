@@ -92,10 +92,12 @@ mod segments;
 mod smoother;
 mod start;
 mod step;
+pub mod truth_clock;
 
 pub use config::{Beams, Calibration, Config, Start};
 pub use error::Error;
 pub use filter::{NIS_CAP, NIS_CAP_RANGE, STATE, StateMatrix, StateVector};
+pub use locus_models::calibrated_unicycle::GaussMarkov;
 pub use log::{Landmark, Log, RefusedRecord, RefusedTime, Sighting, TIME_TOLERANCE, TimeProblem};
 pub use refusals::{Refusal, Refusals};
 pub use report::{Report, StartDisagreement, StartedFrom};

@@ -22,6 +22,8 @@
 
 use locus_logs::NoiseRecords;
 
+use locus_models::calibrated_unicycle::GaussMarkov;
+
 use crate::{Config, Error, Log};
 
 /// How much a replay estimates from its log.
@@ -48,6 +50,9 @@ pub struct Overrides {
     pub odometry_delay: Option<f64>,
     /// What to estimate from the log.
     pub estimation: Estimation,
+    /// The beams' range bias given explicitly (else searched with the
+    /// beams' noise, [`crate::noise::estimate_bias`]).
+    pub beam_bias: Option<GaussMarkov<f64>>,
 }
 
 /// Where a setting came from.
@@ -138,6 +143,22 @@ pub struct Settled {
     pub biases: Vec<BiasSetting>,
     /// The noise estimate, when one was made.
     pub estimate: Option<crate::noise::Estimate>,
+    /// The beams' range bias, for a log with scans.
+    pub range_bias: Option<RangeBiasSetting>,
+}
+
+/// The beams' range bias a replay settled on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RangeBiasSetting {
+    /// Its process ([`Beams::HELD_BIAS`](crate::Beams::HELD_BIAS) when
+    /// held at 0).
+    pub bias: GaussMarkov<f64>,
+    /// Whether it is held at 0 (the beams' errors white).
+    pub held: bool,
+    /// Where it came from.
+    pub source: Source,
+    /// The search, when one ran (whether or not it kept the bias).
+    pub search: Option<crate::noise::BiasEstimate>,
 }
 
 /// Units of the noise levels, in [`NoiseRecords::NAMES`] order.
@@ -190,6 +211,12 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
     };
     cfg.beams.sigma = beam_sigma;
     let (mut beam_se, mut beam_widening) = (f64::NAN, 1.0);
+    let mut bias_source = Source::Default;
+    let mut bias_search = None;
+    if let Some(b) = overrides.beam_bias {
+        cfg.beams.bias = b;
+        bias_source = Source::Given;
+    }
     cfg.odometry_delay = overrides.odometry_delay.unwrap_or(0.0);
     sources[4] = if overrides.odometry_delay.is_some() {
         Source::Given
@@ -300,6 +327,22 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
                 });
             }
             estimate = Some(e);
+            // The range bias is searched with the beams' white noise it
+            // splits, and only where that noise is the log's to tell.
+            if beam_source == Source::Estimated && overrides.beam_bias.is_none() {
+                let q_v_estimated = sources[0] == Source::Estimated;
+                bias_search = crate::noise::estimate_bias(log, &cfg, !q_v_estimated)?;
+                if let Some(b) = bias_search {
+                    cfg.beams.sigma = b.sigma_beam;
+                    cfg.beams.bias = b.bias;
+                    bias_source = Source::Estimated;
+                    (beam_se, beam_widening) = (f64::NAN, 1.0);
+                    if q_v_estimated {
+                        cfg.q_v = b.q_v;
+                        (errors[0], widening[0]) = (f64::NAN, 1.0);
+                    }
+                }
+            }
         }
     }
     let mut settings: Vec<Setting> = NoiseRecords::NAMES
@@ -333,11 +376,18 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
         se: f64::NAN,
         level: cfg.odometry_delay,
     });
+    let range_bias = (!log.scans.is_empty()).then(|| RangeBiasSetting {
+        bias: cfg.beams.bias,
+        held: cfg.beams.bias == crate::Beams::HELD_BIAS,
+        source: bias_source,
+        search: bias_search,
+    });
     Ok(Settled {
         config: cfg,
         settings,
         biases,
         estimate,
+        range_bias,
     })
 }
 

@@ -33,10 +33,12 @@ pub struct Baseline {
 /// The range alone and the linear Kalman filter of the module doc on
 /// `log` (its first beam sensor's scans, its odometry and truth), with the
 /// wall at `wall` (m) and the published range and speed variances `r_var`
-/// (m^2) and `v_var` (m^2/s^2).
+/// (m^2) and `v_var` (m^2/s^2). The truth is interpolated at each scan's
+/// time between samples at most `max_gap` (s) apart, as the replay's is
+/// (`Config::truth_max_gap`).
 #[must_use]
 #[allow(clippy::cast_precision_loss)]
-pub fn baselines(log: &Log, wall: f64, r_var: f64, v_var: f64) -> [Baseline; 2] {
+pub fn baselines(log: &Log, wall: f64, r_var: f64, v_var: f64, max_gap: f64) -> [Baseline; 2] {
     let mut truth = log.truth.cursor();
     let (mut range_sq, mut kf_sq, mut inside, mut n) = (0.0, 0.0, 0usize, 0usize);
     // The filter starts at the first range, with its variance.
@@ -68,7 +70,7 @@ pub fn baselines(log: &Log, wall: f64, r_var: f64, v_var: f64) -> [Baseline; 2] 
         } else {
             x = z;
         }
-        if let Some(t) = truth.pose_at(scan.time, 1e-9) {
+        if let Some(t) = truth.pose_at(scan.time, max_gap) {
             n += 1;
             range_sq += (z - t.x).powi(2);
             kf_sq += (x - t.x).powi(2);

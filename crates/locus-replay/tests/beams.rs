@@ -9,7 +9,8 @@ use locus_logs::locus_csv::LocusLog;
 use locus_logs::mrclam::{Groundtruth, Odometry, TruthPose};
 use locus_logs::{BeamSensor, Scans, SensorMount, Wall};
 use locus_map::{Map, SegmentMap};
-use locus_replay::{Config, EventKind, Log, replay};
+use locus_replay::policy::{Estimation, Overrides, Settled, settle};
+use locus_replay::{Config, EventKind, GaussMarkov, Log, replay};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 
@@ -27,7 +28,14 @@ fn normal(rng: &mut StdRng) -> f64 {
 /// 36 beams (10 degrees apart, from the robot's centre) at 5 Hz, exact
 /// truth. Every `obstacle`-th scan has its first chosen beam read 1 m short.
 fn room_log(seed: u64, obstacle: Option<usize>) -> LocusLog {
+    room_log_with(seed, obstacle, None)
+}
+
+/// [`room_log`] with every beam of a scan also off by a shared range bias,
+/// a Gauss-Markov process `bias` (m, s) sampled exactly at the scans.
+fn room_log_with(seed: u64, obstacle: Option<usize>, bias: Option<GaussMarkov<f64>>) -> LocusLog {
     let mut rng = StdRng::seed_from_u64(seed);
+    let mut b = 0.0;
     let corners = [[0.0, 0.0], [10.0, 0.0], [10.0, 8.0], [0.0, 8.0]];
     let walls: Vec<Wall> = (0..4)
         .map(|i| {
@@ -80,12 +88,19 @@ fn room_log(seed: u64, obstacle: Option<usize>) -> LocusLog {
             theta: p[2],
         });
         if i % 4 == 0 {
+            if let Some(g) = bias {
+                b = if n_scan == 0 {
+                    g.sigma * normal(&mut rng)
+                } else {
+                    g.decay(0.2) * b + g.step_variance(0.2).sqrt() * normal(&mut rng)
+                };
+            }
             let mut ranges: Vec<f32> = (0..BEAMS)
                 .map(|k| {
                     let hit = Map::Segments(map.clone())
                         .cast([p[0], p[1]], p[2] + sensor.angle(k), sensor.max_range)
                         .unwrap();
-                    (hit.range + SIGMA * normal(&mut rng)) as f32
+                    (hit.range + b + SIGMA * normal(&mut rng)) as f32
                 })
                 .collect();
             if obstacle.is_some_and(|o| n_scan % o == 0) {
@@ -187,21 +202,19 @@ fn a_log_with_beams_survives_its_export() {
 }
 
 /// With no noise given, the policy estimates the beams' noise from the log
-/// itself: on white range noise of 2 cm, within 25 % of it, and the
-/// replay with the estimate stays honest.
+/// itself: on white range noise of 2 cm, within 25 % of it, with no range
+/// bias to speak of, and the replay with the estimate stays honest.
 #[test]
 fn the_beams_noise_is_estimated_from_the_log() {
-    use locus_replay::policy::{Estimation, Overrides, settle};
     let log = Log::from_locus("room", room_log(4, None)).unwrap();
-    let settled = settle(
-        &log,
-        &Config::default(),
-        &Overrides {
-            estimation: Estimation::Noise,
-            ..Overrides::default()
-        },
-    )
-    .expect("settle");
+    let settled = no_flags(&log);
+    let bias = settled.range_bias.expect("a log with scans");
+    println!("range bias {bias:?}");
+    // White beams: the search finds a bias too small to matter, and not
+    // significant.
+    let search = bias.search.expect("searched");
+    assert!(bias.bias.sigma < 0.1 * SIGMA, "{bias:?}");
+    assert!(!search.significant(), "{search:?}");
     let sigma = settled.config.beams.sigma;
     let (r, _) = replayed(&log, &settled.config);
     let s = r.summary;
@@ -216,6 +229,178 @@ fn the_beams_noise_is_estimated_from_the_log() {
     );
 }
 
+/// The settings of a replay with no flags.
+fn no_flags(log: &Log) -> Settled {
+    settle(
+        log,
+        &Config::default(),
+        &Overrides {
+            estimation: Estimation::Noise,
+            ..Overrides::default()
+        },
+    )
+    .expect("settle")
+}
+
+/// A range error shared by a scan's beams and persisting from scan to scan
+/// (a Gauss-Markov bias of 3 cm and 5 s beside the white 2 cm) is found as
+/// the range bias with no flags, near the values simulated, and the replay
+/// with it is honest. Taken as white instead (the bias held, the beams'
+/// noise widened for its correlation), the same log's filter is honest
+/// too but far less accurate.
+#[test]
+fn a_persistent_range_error_is_found_as_a_bias() {
+    let simulated = GaussMarkov {
+        sigma: 0.03,
+        tau: 5.0,
+    };
+    let log = Log::from_locus("room", room_log_with(7, None, Some(simulated))).unwrap();
+    let settled = no_flags(&log);
+    let bias = settled.range_bias.expect("a log with scans");
+    let (r, _) = replayed(&log, &settled.config);
+    let s = r.summary;
+    let held = Config {
+        beams: locus_replay::Beams {
+            bias: locus_replay::Beams::HELD_BIAS,
+            ..settled.config.beams
+        },
+        ..settled.config
+    };
+    let white = settle(
+        &log,
+        &held,
+        &Overrides {
+            estimation: Estimation::Noise,
+            beam_bias: Some(locus_replay::Beams::HELD_BIAS),
+            ..Overrides::default()
+        },
+    )
+    .expect("settle");
+    let (rw, _) = replayed(&log, &white.config);
+    println!(
+        "found {:?} (sigma_beam {:.4}); RMSE {:.4} m, 3 sigma {:?}, NEES {:.2}; \
+         white: sigma_beam {:.4}, RMSE {:.4} m, 3 sigma {:?}, NEES {:.2}",
+        bias.bias,
+        settled.config.beams.sigma,
+        s.position_rmse,
+        s.within_3_sigma,
+        s.mean_nees,
+        white.config.beams.sigma,
+        rw.summary.position_rmse,
+        rw.summary.within_3_sigma,
+        rw.summary.mean_nees
+    );
+    assert!(!bias.held, "{bias:?}");
+    // 120 s hold about 12 independent stretches of a 5 s process, so each
+    // value is known to some 20-40 % (seeds 7, 8, 9: sigma 0.036, 0.038,
+    // 0.036 m; tau 5.6, 5.9, 4.6 s).
+    assert!(
+        (0.6..1.6).contains(&(bias.bias.sigma / simulated.sigma)),
+        "{bias:?}"
+    );
+    assert!(
+        (0.4..2.5).contains(&(bias.bias.tau / simulated.tau)),
+        "{bias:?}"
+    );
+    assert!(
+        s.within_3_sigma[0] >= 0.9 && s.within_3_sigma[1] >= 0.9,
+        "{s:?}"
+    );
+    assert!(
+        rw.summary.position_rmse > 1.5 * s.position_rmse,
+        "{:?}",
+        rw.summary
+    );
+}
+
+/// The truth's clock is measured from the sensors: a simulated log's
+/// truth, exact, is compared at its stamps; the same truth stamped 0.1 s
+/// late is found 0.1 s late and compared there.
+#[test]
+fn the_truth_clock_is_measured_from_the_sensors() {
+    use locus_replay::truth_clock::{STEP, measure};
+    let mut log = Log::from_locus("room", room_log(4, None)).unwrap();
+    let cfg = Config::default();
+    let exact = measure(&log, &cfg).expect("truth and scans");
+    println!("exact truth: {exact:?}");
+    assert!(!exact.applied, "{exact:?}");
+    assert!(exact.offset.abs() <= STEP, "{exact:?}");
+    log.truth = log.truth.shifted(0.1);
+    let late = measure(&log, &cfg).expect("truth and scans");
+    println!("truth 0.1 s late: {late:?}");
+    assert!(late.applied, "{late:?}");
+    assert!((late.offset - 0.1).abs() <= STEP, "{late:?}");
+}
+
+/// laser_wall_1d (paper 000's laser to a wall, Vicon truth) replayed with
+/// no flags (issue 29): its truth is found about 70 ms late against the
+/// laser and compared there; the range error that persists for seconds is
+/// found as the range bias; the filter and the smoother are then each
+/// inside their 3 sigma at least 90 % of the time, the smoother no worse
+/// than the range alone, the filter within 1 % of it. (Measured: filter
+/// 6.62 mm, smoother 6.32 mm, the range alone 6.60 mm. A causal filter
+/// cannot do better than follow the range here: the range error persists
+/// for about 4 s, over which the odometry's own walk grows to about a
+/// centimetre.)
+#[test]
+fn laser_wall_replayed_with_no_flags_is_honest() {
+    let path = std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/laser_wall_1d/dataset1.txt"
+    ));
+    let read = locus_logs::aer1513::read(path).expect("laser_wall_1d");
+    let mut log = Log::from_locus("dataset1.txt", read.log).unwrap();
+    let base = Config {
+        smooth: true,
+        ..Config::default()
+    };
+    let clock = locus_replay::truth_clock::settle(&mut log, &base, None).expect("truth");
+    let settled = settle(
+        &log,
+        &base,
+        &Overrides {
+            estimation: Estimation::Noise,
+            ..Overrides::default()
+        },
+    )
+    .expect("settle");
+    let r = replay(&log, &settled.config, |_| {}).expect("replay");
+    let smoothed = r.smoothed.expect("smoothed");
+    let [range, kf] = locus_replay::rail::baselines(
+        &log,
+        read.wall_x,
+        read.r_var,
+        read.v_var,
+        base.truth_max_gap,
+    );
+    println!(
+        "{clock}\nrange bias {:?}, sigma_beam {:.4}, q_v {:.2e}\nfilter RMSE {:.5} m, 3 sigma {:?}\n\
+         smoother RMSE {:.5} m, 3 sigma {:?}\nrange alone {:.5} m; linear KF {:.5} m, {:.3}",
+        settled.range_bias,
+        settled.config.beams.sigma,
+        settled.config.q_v,
+        r.summary.position_rmse,
+        r.summary.within_3_sigma,
+        smoothed.position_rmse,
+        smoothed.within_3_sigma,
+        range.rmse,
+        kf.rmse,
+        kf.within_3_sigma
+    );
+    assert!(
+        clock.applied && (0.05..=0.09).contains(&clock.offset),
+        "{clock:?}"
+    );
+    assert!(!settled.range_bias.expect("scans").held);
+    for (name, s, bound) in [
+        ("filter", r.summary, 1.01 * range.rmse),
+        ("smoother", smoothed, range.rmse),
+    ] {
+        assert!(s.position_rmse <= bound, "{name}: {s:?} against {range:?}");
+        assert!(s.within_3_sigma[0] >= 0.9, "{name}: {s:?}");
+    }
+}
+
 /// The laser_wall_1d baselines reproduce the figures the data's README
 /// gives (measured there by its own script): the range alone 0.0192 m, the
 /// linear Kalman filter given the published noise 0.0253 m with 66 % of
@@ -228,7 +413,13 @@ fn the_laser_wall_baselines_match_the_published_figures() {
     ));
     let read = locus_logs::aer1513::read(path).expect("laser_wall_1d");
     let log = Log::from_locus("dataset1.txt", read.log).unwrap();
-    let [range, kf] = locus_replay::rail::baselines(&log, read.wall_x, read.r_var, read.v_var);
+    let [range, kf] = locus_replay::rail::baselines(
+        &log,
+        read.wall_x,
+        read.r_var,
+        read.v_var,
+        locus_replay::Config::default().truth_max_gap,
+    );
     println!("range alone {range:?}\nlinear KF {kf:?}");
     assert_eq!(range.compared, 12709);
     assert!((range.rmse - 0.0192).abs() < 0.00005, "{range:?}");

@@ -184,6 +184,7 @@ fn run_member(member: &Member, seed: u64, estimate: Estimate, out: Option<&Path>
                 },
                 odometry_delay: Some(truth.odometry_delay),
                 estimation: Estimation::Nothing,
+                beam_bias: None,
             },
         )
         .context("reference replay")?;

@@ -230,6 +230,45 @@ pub fn settings(settled: &Settled) -> Table {
         let name = format!("{} [{}]", b.name, b.unit);
         t.add_row(vec![name, value, "-".to_string(), "-".to_string(), from]);
     }
+    if let Some(r) = &settled.range_bias {
+        let threshold = locus_replay::noise::LR_HALF;
+        let from = match (r.source, r.search) {
+            (From::Given, _) => "given".to_string(),
+            (_, Some(s)) => format!(
+                "estimated from the log (maximum likelihood, {} replays): it lowers the \
+                 innovation NLL by {:.1} against white beams searched alike ({} at 99 % beyond \
+                 {threshold:.1})",
+                s.evaluations,
+                s.white_nll - s.nll,
+                if s.significant() {
+                    "significant"
+                } else {
+                    "not significant"
+                }
+            ),
+            (_, None) => "held: sigma_beam is not estimated (given or in the log)".to_string(),
+        };
+        let (sigma, tau) = if r.held {
+            ("held at 0".to_string(), "-".to_string())
+        } else {
+            (format!("{:.5}", r.bias.sigma), format!("{:.2}", r.bias.tau))
+        };
+        let dash = || "-".to_string();
+        t.add_row(vec![
+            "beam range bias sigma [m]".to_string(),
+            sigma,
+            dash(),
+            dash(),
+            from,
+        ]);
+        t.add_row(vec![
+            "beam range bias tau [s]".to_string(),
+            tau,
+            dash(),
+            dash(),
+            dash(),
+        ]);
+    }
     t
 }
 

@@ -66,7 +66,10 @@ use locus_models::range_bearing::RangeBearing;
 use crate::log::NoiseRecords;
 
 mod beams;
+mod bias;
 mod grid;
+
+pub use bias::{BiasEstimate, LR_HALF, estimate_bias};
 
 use crate::{Config, Error, EventKind, Log, STATE, Step, replay};
 use beams::{KeptScan, beam_noise, smoothed_state};

@@ -11,7 +11,7 @@ use locus_logs::mrclam::Dataset;
 use locus_models::plausible::Limits;
 use locus_replay::log::SharedMap;
 use locus_replay::policy::{Estimation, Overrides};
-use locus_replay::{Config, Log, Start};
+use locus_replay::{Config, GaussMarkov, Log, Start};
 
 use crate::plot::PictureArgs;
 
@@ -220,6 +220,22 @@ pub struct Flags {
     /// estimated from the log.
     #[arg(long, value_parser = super::positive_f64)]
     pub sigma_beam: Option<f64>,
+    /// Stationary standard deviation of the beams' range bias, m: the part
+    /// of a range sensor's error that persists from scan to scan (a
+    /// Gauss-Markov state; with --beam-bias-tau). Default: searched with
+    /// the beams' noise when that is estimated (docs/replay.md), else held
+    /// at 0.
+    #[arg(long, value_parser = super::positive_f64, requires = "beam_bias_tau")]
+    pub beam_bias_sigma: Option<f64>,
+    /// How late the ground truth's stamps are against the robot's sensors,
+    /// s: the truth is compared at its stamp minus this (0: at the stamps).
+    /// Default: measured from the sensors' range readings predicted from
+    /// the truth, and applied where it is decisive (docs/replay.md).
+    #[arg(long, value_parser = super::finite_f64, allow_negative_numbers = true)]
+    pub truth_offset: Option<f64>,
+    /// Time constant of the beams' range bias, s (with --beam-bias-sigma).
+    #[arg(long, value_parser = super::positive_f64, requires = "beam_bias_sigma")]
+    pub beam_bias_tau: Option<f64>,
     /// Beams a scan spends at most, spread evenly over it [count, >= 1]:
     /// neighbouring beams see the same surface with errors alike, so beyond
     /// a few tens each adds little information for its time (docs/replay.md).
@@ -334,6 +350,10 @@ impl Flags {
                 sigma_beam: self.sigma_beam,
             },
             odometry_delay: self.odometry_delay,
+            beam_bias: self
+                .beam_bias_sigma
+                .zip(self.beam_bias_tau)
+                .map(|(sigma, tau)| GaussMarkov { sigma, tau }),
             estimation: if self.no_estimate {
                 Estimation::Nothing
             } else if self.delay_only {

@@ -40,7 +40,12 @@ pub struct Args {
 /// A log that cannot be read (file and line named), an invalid setting, a
 /// file that cannot be written.
 pub fn run(args: &Args) -> Result<()> {
-    let loaded = args.source.read()?;
+    let mut loaded = args.source.read()?;
+    let clock = locus_replay::truth_clock::settle(
+        &mut loaded.log,
+        &loaded.flags.config(),
+        loaded.flags.truth_offset,
+    );
     let (log, export, flags) = (&loaded.log, loaded.export, loaded.flags);
     if let Some(path) = export {
         fs::write(path, locus_logs::locus_csv::write(&log.to_locus()))
@@ -57,7 +62,7 @@ pub fn run(args: &Args) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("out/replay-{slug}")));
-    execute(log, &settled, flags, &out, loaded.rail)
+    execute(log, &settled, flags, &out, loaded.rail, clock)
 }
 
 fn execute(
@@ -66,6 +71,7 @@ fn execute(
     flags: &Flags,
     out: &Path,
     rail: Option<[f64; 3]>,
+    clock: Option<locus_replay::truth_clock::TruthClock>,
 ) -> Result<()> {
     let cfg = &settled.config;
     crate::output::prepare_run_dir(out)?;
@@ -122,6 +128,9 @@ fn execute(
     if let Some(d) = &report.start_disagreement {
         text.push_str(&format!("{d}\n"));
     }
+    if let Some(c) = clock {
+        text.push_str(&format!("{c}\n"));
+    }
     let labels = match (log.sightings.is_empty(), log.scans.is_empty()) {
         (true, false) => ("EKF (odometry + beams)", "scan"),
         (false, false) => ("EKF (odometry + landmarks + beams)", "landmark or scan"),
@@ -133,7 +142,7 @@ fn execute(
     if let Some([wall, r_var, v_var]) = rail {
         // Beside them: what the rail's range alone and the linear Kalman
         // filter given the published noise reach (x only).
-        let [range, kf] = locus_replay::rail::baselines(log, wall, r_var, v_var);
+        let [range, kf] = locus_replay::rail::baselines(log, wall, r_var, v_var, cfg.truth_max_gap);
         for (name, b) in [("range alone", range), ("linear KF, published noise", kf)] {
             let share = format!("{} (x)", fig(b.within_3_sigma, 100.0, 1));
             honesty.add_row([name, &fig(b.rmse, 1.0, 3), "n/a", "n/a", "n/a", &share]);
