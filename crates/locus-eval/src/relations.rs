@@ -39,27 +39,57 @@ pub struct RelationErrors {
     pub uncovered: usize,
     /// Mean translational error, m; NaN when none was judged.
     pub mean_translation: f64,
-    /// Its standard deviation over the relations, m.
+    /// Its standard deviation over the relations (divided by their
+    /// count), m; NaN when none was judged.
     pub std_translation: f64,
     /// Mean rotational error, rad; NaN when none was judged.
     pub mean_rotation: f64,
-    /// Its standard deviation over the relations, rad.
+    /// Its standard deviation over the relations (divided by their
+    /// count), rad; NaN when none was judged.
     pub std_rotation: f64,
 }
 
 /// The errors of the trajectory `pose_at` (the pose at a time, `None` where
 /// it has none) over `relations`.
 #[must_use]
-#[allow(clippy::cast_precision_loss)]
 pub fn evaluate(
     relations: &[Relation],
     mut pose_at: impl FnMut(f64) -> Option<[f64; 3]>,
 ) -> RelationErrors {
+    judge(relations.iter().map(|r| (r, pose_at(r.t1), pose_at(r.t2))))
+}
+
+/// The errors of a trajectory known at indices (e.g. a log's scans; `pose`
+/// gives the pose at an index, `None` where it has none) over `relations`,
+/// whose ends fall on the indices `ends` (one per relation, `None` when
+/// they fall on none: `locus_logs::relations::on_scans`). A relation whose
+/// ends fall on no index, or on one without a pose, is uncovered.
+///
+/// # Panics
+/// If `ends` is not as long as `relations`.
+#[must_use]
+pub fn evaluate_at(
+    relations: &[Relation],
+    ends: &[Option<(usize, usize)>],
+    mut pose: impl FnMut(usize) -> Option<[f64; 3]>,
+) -> RelationErrors {
+    assert_eq!(relations.len(), ends.len(), "one pair of ends per relation");
+    judge(relations.iter().zip(ends).map(|(r, e)| match *e {
+        Some((i, j)) => (r, pose(i), pose(j)),
+        None => (r, None, None),
+    }))
+}
+
+/// The errors of each relation with the trajectory's poses at its two ends.
+#[allow(clippy::cast_precision_loss)]
+fn judge<'a>(
+    pairs: impl Iterator<Item = (&'a Relation, Option<[f64; 3]>, Option<[f64; 3]>)>,
+) -> RelationErrors {
     let mut t = Vec::new();
     let mut r = Vec::new();
     let mut uncovered = 0;
-    for rel in relations {
-        match (pose_at(rel.t1), pose_at(rel.t2)) {
+    for (rel, a, b) in pairs {
+        match (a, b) {
             (Some(a), Some(b)) => {
                 let (et, er) = error(between(a, b), rel);
                 t.push(et);
@@ -153,5 +183,35 @@ mod tests {
         let e = evaluate(&[r], |_| None);
         assert_eq!((e.judged, e.uncovered), (0, 1));
         assert!(e.mean_translation.is_nan() && e.mean_rotation.is_nan());
+    }
+
+    #[test]
+    fn relations_judged_at_indices_count_those_on_no_index_as_uncovered() {
+        // Poses at three scans; the relations' ends on scans (0, 1), on
+        // none, and on (1, 2) where scan 2 has no pose.
+        let poses = [Some([0.0, 0.0, 0.0]), Some([1.0, 0.2, 0.1]), None];
+        let r = |dx: f64| Relation {
+            t1: 0.0,
+            t2: 1.0,
+            dx,
+            dy: 0.2,
+            dyaw: 0.1,
+            line: 0,
+        };
+        let rel = [r(1.0), r(1.0), r(0.9)];
+        let ends = [Some((0, 1)), None, Some((1, 2))];
+        let e = evaluate_at(&rel, &ends, |i| poses[i]);
+        assert_eq!((e.judged, e.uncovered), (1, 2));
+        assert!(
+            e.mean_translation < 1e-12 && e.std_translation == 0.0,
+            "{e:?}"
+        );
+        // Two judged: errors 0 and 0.1 m, mean 0.05, standard deviation 0.05.
+        let all = [Some([0.0, 0.0, 0.0]), Some([1.0, 0.2, 0.1])];
+        let e = evaluate_at(&[r(1.0), r(0.9)], &[Some((0, 1)); 2], |i| all[i]);
+        assert!(
+            (e.mean_translation - 0.05).abs() < 1e-12 && (e.std_translation - 0.05).abs() < 1e-12,
+            "{e:?}"
+        );
     }
 }

@@ -245,6 +245,65 @@ impl Calibration {
     }
 }
 
+/// One trajectory's errors over a set of relative poses
+/// ([`crate::relations`]): how many relations it was judged on, and the
+/// mean and standard deviation (divided by the count) of the translational
+/// (m) and rotational (rad) errors; NaN when none was judged.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RelationFigures {
+    /// Relations judged (both ends covered by the trajectory).
+    pub compared: usize,
+    /// Mean translational error, m.
+    pub mean_translation_m: f64,
+    /// Its standard deviation, m.
+    pub std_translation_m: f64,
+    /// Mean rotational error (absolute, wrapped), rad.
+    pub mean_rotation_rad: f64,
+    /// Its standard deviation, rad.
+    pub std_rotation_rad: f64,
+}
+
+impl From<&crate::relations::RelationErrors> for RelationFigures {
+    fn from(e: &crate::relations::RelationErrors) -> Self {
+        Self {
+            compared: e.judged,
+            mean_translation_m: e.mean_translation,
+            std_translation_m: e.std_translation,
+            mean_rotation_rad: e.mean_rotation,
+            std_rotation_rad: e.std_rotation,
+        }
+    }
+}
+
+/// The `relations` section of a replay judged against relative poses
+/// measured apart from the log (Kuemmerle et al. 2009; `locus replay carmen
+/// --relations`): how many relations the file holds and fall on the log's
+/// scans, and the errors of the filter, the smoother, the log's own truth
+/// and its odometry over them.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Relations {
+    /// Relations in the file.
+    pub in_file: usize,
+    /// Of those, the ones with both ends on a scan's time stamp.
+    pub on_scans: usize,
+    /// Of those, the ones left out with an end on an ambiguous scan (one
+    /// that two different relation times fall on); the others are judged.
+    pub ambiguous: usize,
+    /// How near a scan's stamp an end must be to fall on it, s.
+    pub match_tolerance_s: f64,
+    /// The filter's estimate after each scan.
+    pub filter: RelationFigures,
+    /// The smoother's estimate at each scan (with a smoother only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub smoother: Option<RelationFigures>,
+    /// The log's ground truth at the scans (a CARMEN log's corrected
+    /// poses).
+    pub truth: RelationFigures,
+    /// The log's odometry alone, composed from scan to scan (no filter,
+    /// no calibration, no delay).
+    pub odometry: RelationFigures,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,5 +1,6 @@
 //! Issue 31: every `metrics.json` (`locus run`, a Monte Carlo, `locus
-//! replay` with and without `--smooth`, with and without ground truth)
+//! replay` with and without `--smooth`, with and without ground truth, and
+//! judged against relations, `locus replay carmen --relations`)
 //! validates against `docs/metrics.schema.json`; a replay's has no key of
 //! the simulator (`ir_*`, `sim_*`, `*laps*`); the files of the old shape
 //! (`tests/fixtures/metrics-v1-*.json`) do not validate.
@@ -118,6 +119,38 @@ fn every_source_writes_metrics_that_validate_against_the_schema() {
     } else {
         eprintln!("note: {mrclam} not found; the MRCLAM replays are skipped");
     }
+    let intel = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/intel_lab"
+    );
+    if Path::new(intel).is_dir() {
+        // The Intel lab judged against its relations: the `relations`
+        // section (a map first, from its corrected poses).
+        let log = format!("{intel}/intel-corrected.log.gz");
+        let map = dir.join("intel-map");
+        let o = Command::new(env!("CARGO_BIN_EXE_locus"))
+            .args(["map", "--carmen", &log, "--out", &s(&map)])
+            .output()
+            .expect("run locus map");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let args = [
+            "replay",
+            "carmen",
+            &log,
+            "--map",
+            &s(&map.join("map.yaml")),
+            "--relations",
+            &format!("{intel}/intel.relations.xz"),
+            "--no-estimate",
+            "--smooth",
+        ];
+        files.push((
+            "intel relations".into(),
+            metrics_of(&args, &dir.join("intel")),
+        ));
+    } else {
+        eprintln!("note: {intel} not found; the Intel lab's replay is skipped");
+    }
 
     for (name, m) in &files {
         let e = errors(&validator, m);
@@ -150,6 +183,18 @@ fn every_source_writes_metrics_that_validate_against_the_schema() {
     assert_eq!(by_name("run")["simulation"]["laps_completed"], 1);
     assert!(by_name("wall45")["simulation"].get("laps").is_none());
     assert_eq!(by_name("monte carlo")["monte_carlo"]["runs"], 3);
+    // The relations section only where asked for, with the smoother's
+    // figures beside the filter's when smoothed.
+    for (name, m) in &files {
+        assert_eq!(
+            m.get("relations").is_some(),
+            name == "intel relations",
+            "{name}"
+        );
+    }
+    if let Some((_, m)) = files.iter().find(|(n, _)| n == "intel relations") {
+        assert!(m["relations"]["smoother"]["compared"].is_u64(), "{m:#}");
+    }
     let _ = fs::remove_dir_all(&dir);
 }
 

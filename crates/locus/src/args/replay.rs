@@ -14,6 +14,7 @@ use locus_replay::policy::{Estimation, Overrides};
 use locus_replay::{Config, GaussMarkov, Log, Start};
 
 use crate::plot::PictureArgs;
+use crate::replay::relations::Reference;
 
 /// The log replayed: its format and where it is.
 #[derive(Subcommand, Debug)]
@@ -88,6 +89,18 @@ pub enum Source {
         /// Also write the log in Locus's CSV format to this file.
         #[arg(long)]
         export: Option<PathBuf>,
+        /// Judge the replay against relative poses between scan times
+        /// (`t1 t2 dx dy dz roll pitch dyaw` lines, plain or `.xz`; e.g.
+        /// `../shared/data/intel_lab/intel.relations.xz`, Kuemmerle et al.
+        /// 2009): the mean translational and rotational errors of the
+        /// filter, the smoother, the corrected poses and raw odometry
+        /// (table and metrics.json).
+        #[arg(long)]
+        relations: Option<PathBuf>,
+        /// The relations' times minus the log's, s. Default: the Intel
+        /// lab's (`locus_logs::relations::INTEL_OFFSET`).
+        #[arg(long, default_value_t = locus_logs::relations::INTEL_OFFSET, value_parser = super::finite_f64, requires = "relations")]
+        relations_offset: f64,
         #[command(flatten)]
         common: Flags,
     },
@@ -105,6 +118,9 @@ pub struct Loaded<'a> {
     /// the published range (m^2) and speed (m^2/s^2) variances, for the
     /// baselines (`locus_replay::rail`).
     pub rail: Option<[f64; 3]>,
+    /// For a CARMEN log with `--relations`: the relations and the
+    /// trajectories judged against them that need no replay.
+    pub relations: Option<Reference>,
 }
 
 impl Source {
@@ -115,16 +131,22 @@ impl Source {
     /// A log or map that cannot be read, naming the file (and line).
     pub fn read(&self) -> anyhow::Result<Loaded<'_>> {
         let mut rail = None;
-        let (log, export, flags) = self.log(&mut rail)?;
+        let mut relations = None;
+        let (log, export, flags) = self.log(&mut rail, &mut relations)?;
         Ok(Loaded {
             log,
             export,
             flags,
             rail,
+            relations,
         })
     }
 
-    fn log(&self, rail: &mut Option<[f64; 3]>) -> anyhow::Result<(Log, Option<&PathBuf>, &Flags)> {
+    fn log(
+        &self,
+        rail: &mut Option<[f64; 3]>,
+        reference: &mut Option<Reference>,
+    ) -> anyhow::Result<(Log, Option<&PathBuf>, &Flags)> {
         let name = |p: &std::path::Path| {
             p.file_name()
                 .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
@@ -173,9 +195,14 @@ impl Source {
                 file,
                 map,
                 export,
+                relations,
+                relations_offset,
                 common,
             } => {
                 let read = locus_logs::carmen::read(file)?;
+                if let Some(path) = relations {
+                    *reference = Some(Reference::carmen(&read, path, *relations_offset)?);
+                }
                 let mut log = Log::from_locus(&name(file), read.log)?;
                 let loaded = locus_replay::log::Map::load(map)
                     .with_context(|| format!("reading the map {}", map.display()))?;

@@ -4,8 +4,10 @@
 //! replays, writes the CSV files ([`locus_replay::csv_out`]) and judges
 //! the start. This command parses the flags ([`crate::args::replay`]) and
 //! prints: the summary tables (plus the replay's settings, calibration and
-//! counts), `log.csv` (one row per event), `metrics.json` (the results
-//! schema with the replay's section, [`locus_replay::results`]) and the
+//! counts; for `locus replay carmen --relations`, the errors against the
+//! relations, [`relations`]), `log.csv` (one row per event), `metrics.json`
+//! (the results schema with the replay's section, [`locus_replay::results`],
+//! and the `relations` section when judged against them) and the
 //! pictures (map with the landmarks as crosses, true/estimated/odometry
 //! paths and covariance ellipses; errors with +-3 sigma; variances; the NIS
 //! with the consistency monitor's window mean and interval).
@@ -26,6 +28,8 @@ use crate::metrics::{self, Metrics};
 use crate::output::{print_out, progress_bar};
 use crate::run::files_written;
 use crate::table::{fig, with_header};
+
+pub mod relations;
 
 /// Arguments of `locus replay`.
 #[derive(clap::Args, Debug)]
@@ -62,7 +66,25 @@ pub fn run(args: &Args) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("out/replay-{slug}")));
-    execute(log, &settled, flags, &out, loaded.rail, clock)
+    execute(
+        log,
+        &settled,
+        flags,
+        &out,
+        loaded.rail,
+        loaded.relations.as_ref(),
+        clock,
+    )
+}
+
+/// The replay's sections of `metrics.json` and, when it was judged against
+/// relations, their section after them.
+#[derive(serde::Serialize)]
+struct Sections<'a> {
+    #[serde(flatten)]
+    replay: &'a Section,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    relations: Option<&'a locus_eval::results::Relations>,
 }
 
 fn execute(
@@ -71,6 +93,7 @@ fn execute(
     flags: &Flags,
     out: &Path,
     rail: Option<[f64; 3]>,
+    reference: Option<&relations::Reference>,
     clock: Option<locus_replay::truth_clock::TruthClock>,
 ) -> Result<()> {
     let cfg = &settled.config;
@@ -82,10 +105,14 @@ fn execute(
     let total = (log.odometry.len() + log.sightings.len() + log.scans.len()) as u64;
     let bar = progress_bar(total, "{pos}/{len} events, {elapsed} elapsed")?;
     let mut samples: Vec<Sample> = Vec::new();
+    let mut at_scans = reference.map(relations::Reference::gather);
     let smoothed = cfg.smooth.then_some(smoothed_path.as_path());
     let report = replay_to_csv(log, cfg, &csv_path, smoothed, |step| {
         if step.index % 4096 == 0 {
             bar.set_position(step.index as u64);
+        }
+        if let Some(at) = &mut at_scans {
+            at.take(step);
         }
         if !flags.pictures.no_plots
             && let Some(s) = step.sample()
@@ -98,9 +125,16 @@ fn execute(
 
     let results = Results::of(&report.summary).with_smoother(report.smoothed.as_ref());
     let section = Section::new(cfg, &report);
+    let judged = reference
+        .zip(at_scans.as_ref())
+        .map(|(r, at)| r.judge(at, cfg.smooth));
+    let sections = Sections {
+        replay: &section,
+        relations: judged.as_ref(),
+    };
     let metrics_path = metrics::write(
         out,
-        &Metrics::new(metrics::Source::Replay, &log.name, results, &section),
+        &Metrics::new(metrics::Source::Replay, &log.name, results, &sections),
     )?;
 
     let pictures = if flags.pictures.no_plots || samples.is_empty() {
@@ -148,8 +182,11 @@ fn execute(
             honesty.add_row([name, &fig(b.rmse, 1.0, 3), "n/a", "n/a", "n/a", &share]);
         }
     }
+    text.push_str(&format!("{honesty}\n"));
+    if let Some((r, judged)) = reference.zip(judged.as_ref()) {
+        text.push_str(&r.table(judged));
+    }
     for table in [
-        honesty,
         crate::table::settings(settled),
         crate::table::calibration(&section.calibration, smoother_calibration.as_ref()),
         counts(&report, &section),

@@ -1,0 +1,144 @@
+//! `locus replay carmen --relations` on the Intel lab (issue 29): the
+//! table of the errors against the hand-verified relations (Kuemmerle et
+//! al. 2009) and its `metrics.json` section. The corrected poses are the
+//! reference the relations were verified against, so their own errors are
+//! small; a wrong time alignment (a wrong offset, a scan off by one) or a
+//! relation matched to the wrong scan would make them large. Raw odometry's
+//! are far larger. The data is read from `../shared/data`; the test is
+//! skipped without it.
+
+mod common;
+
+use std::fs;
+use std::path::Path;
+use std::process::Command;
+
+use serde_json::Value;
+
+/// Runs `locus` with `args`, asserts success and returns the standard
+/// output.
+fn locus(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_locus"))
+        .args(args)
+        .output()
+        .expect("run locus");
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "locus {args:?} failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
+
+/// The cells after the name of the row of the relations' table (in the
+/// replay's output `text`) whose name starts with `name`.
+fn row(text: &str, name: &str) -> Vec<String> {
+    let table = &text[text.find("relations (").expect("the relations' table")..];
+    let line = table
+        .lines()
+        .find(|l| l.trim_start_matches('│').trim_start().starts_with(name))
+        .unwrap_or_else(|| panic!("no row {name} in\n{table}"));
+    line.trim_matches('│')
+        .split('┆')
+        .skip(1)
+        .map(|c| c.trim().to_string())
+        .collect()
+}
+
+/// A row's cell as a number.
+fn num(cells: &[String], k: usize) -> f64 {
+    cells[k]
+        .parse()
+        .unwrap_or_else(|e| panic!("{cells:?}[{k}]: {e}"))
+}
+
+#[test]
+fn the_intel_lab_against_its_relations() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/intel_lab");
+    let log = data.join("intel-corrected.log.gz");
+    let relations = data.join("intel.relations.xz");
+    if !log.is_file() || !relations.is_file() {
+        eprintln!("skipped: {} not found", data.display());
+        return;
+    }
+    let dir = common::scratch("relations-intel");
+    let s = |p: &Path| p.to_str().expect("utf-8").to_owned();
+    locus(&["map", "--carmen", &s(&log), "--out", &s(&dir.join("map"))]);
+    let (log, map, relations) = (s(&log), s(&dir.join("map/map.yaml")), s(&relations));
+    let replay = |out: &str, extra: &[&str]| {
+        // The noise as given (not estimated): the relations' figures of
+        // the truth and the odometry do not depend on it, and the replay
+        // takes a fraction of a second.
+        let out = s(&dir.join(out));
+        let mut args = vec![
+            "replay",
+            "carmen",
+            &log,
+            "--map",
+            &map,
+            "--relations",
+            &relations,
+            "--no-estimate",
+            "--smooth",
+            "--no-plots",
+            "--out",
+            &out,
+        ];
+        args.extend_from_slice(extra);
+        locus(&args)
+    };
+    let text = replay("replay", &[]);
+    println!("{text}");
+    assert!(
+        text.contains(
+            "relations (intel.relations.xz): 2984 in the file; 119 with both ends within 5 ms \
+             of a scan's stamp, 14 of them left out as ambiguous"
+        ),
+        "{text}"
+    );
+    let deg = 180.0 / core::f64::consts::PI;
+    let [filter, smoother, truth, odometry] =
+        ["filter", "smoother", "corrected poses", "raw odometry"].map(|name| row(&text, name));
+    for cells in [&filter, &smoother, &truth, &odometry] {
+        assert_eq!(cells[0], "105", "{cells:?}");
+    }
+    // The corrected poses: measured 0.036 +- 0.027 m and 0.61 +- 0.86 deg.
+    // With the 14 ambiguous relations kept, 0.067 m; with every scan off
+    // by one, 0.35 m and 7 deg.
+    let (t, r) = (num(&truth, 1), num(&truth, 3));
+    assert!(t < 0.05 && r < 1.0, "corrected poses {truth:?}");
+    // Raw odometry: measured 3.25 m and 18.5 deg.
+    let (ot, or) = (num(&odometry, 1), num(&odometry, 3));
+    assert!(ot > 20.0 * t && or > 10.0 * r, "raw odometry {odometry:?}");
+
+    // metrics.json has the same figures, in SI units.
+    let metrics: Value =
+        serde_json::from_str(&fs::read_to_string(dir.join("replay/metrics.json")).unwrap())
+            .unwrap();
+    let m = &metrics["relations"];
+    assert_eq!(
+        [&m["in_file"], &m["on_scans"], &m["ambiguous"]],
+        [2984, 119, 14]
+    );
+    assert_eq!(m["truth"]["compared"], 105);
+    let close = |json: &Value, shown: f64, scale: f64, decimals: i32| {
+        let v = json.as_f64().expect("a number") * scale;
+        (v - shown).abs() <= 0.5 * 10f64.powi(-decimals) + 1e-12
+    };
+    assert!(close(&m["truth"]["mean_translation_m"], t, 1.0, 3), "{m:#}");
+    assert!(close(&m["truth"]["mean_rotation_rad"], r, deg, 2), "{m:#}");
+    let spread = num(&odometry, 2);
+    assert!(close(&m["odometry"]["std_translation_m"], spread, 1.0, 3));
+
+    // A wrong offset (the relations' times 0.5 s off the scans'): no
+    // relation falls on a scan, and every figure is n/a, not 0.
+    let text = replay("wrong-offset", &["--relations-offset", "976052857.837"]);
+    assert!(
+        text.contains("2984 in the file; 0 with both ends"),
+        "{text}"
+    );
+    let truth = row(&text, "corrected poses");
+    assert_eq!(truth, ["0", "n/a", "n/a", "n/a", "n/a"]);
+    let _ = fs::remove_dir_all(&dir);
+}
