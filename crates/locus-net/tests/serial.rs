@@ -156,9 +156,19 @@ fn run_serial(damage: bool) -> (RobotReport, HostReport, Damage) {
         idle_exit: 10.0,
         ..RobotConfig::default()
     };
+    // The robot's end of the line stays open until the relays have
+    // stopped. A pty has no transmit queue (the robot's drain returns at
+    // once): its last frames wait in the master for the relay to read them.
+    // Once the slave is closed, a poll of the master reports a hangup
+    // along with the data, and serialport's read then fails without
+    // reading, so those frames would never reach the host, which is still
+    // listening (it ends only after `quiet` without telemetry). A UART
+    // sends what was written whatever its writer does next.
     let robot = thread::spawn(move || {
         let port: Box<dyn SerialPort> = Box::new(robot_end);
-        run_robot_over(&mut Serial::new(port), &robot_cfg).unwrap()
+        let mut link = Serial::new(port);
+        let report = run_robot_over(&mut link, &robot_cfg).unwrap();
+        (report, link)
     });
     let port: Box<dyn SerialPort> = Box::new(host_end);
     let host = run_host_over(
@@ -167,10 +177,11 @@ fn run_serial(damage: bool) -> (RobotReport, HostReport, Damage) {
         &mut |_| {},
     )
     .unwrap();
-    let robot = robot.join().unwrap();
+    let (robot, robot_end) = robot.join().unwrap();
     stop.store(true, Ordering::Relaxed);
     let damage = up.join().unwrap();
     down.join().unwrap();
+    drop(robot_end);
     (robot, host, damage)
 }
 
