@@ -333,12 +333,13 @@ pub fn settle(log: &Log, base: &Config, overrides: &Overrides) -> Result<Settled
                 let q_v_estimated = sources[0] == Source::Estimated;
                 bias_search = crate::noise::estimate_bias(log, &cfg, !q_v_estimated)?;
                 if let Some(b) = bias_search {
-                    cfg.beams.sigma = b.sigma_beam;
-                    cfg.beams.bias = b.bias;
+                    let (sigma, bias, q_v) = b.chosen();
+                    cfg.beams.sigma = sigma;
+                    cfg.beams.bias = bias;
                     bias_source = Source::Estimated;
                     (beam_se, beam_widening) = (f64::NAN, 1.0);
                     if q_v_estimated {
-                        cfg.q_v = b.q_v;
+                        cfg.q_v = q_v;
                         (errors[0], widening[0]) = (f64::NAN, 1.0);
                     }
                 }

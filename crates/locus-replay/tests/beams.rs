@@ -338,7 +338,7 @@ fn the_truth_clock_is_measured_from_the_sensors() {
 /// found as the range bias; the filter and the smoother are then each
 /// inside their 3 sigma at least 90 % of the time, the smoother no worse
 /// than the range alone, the filter within 1 % of it. (Measured: filter
-/// 6.62 mm, smoother 6.32 mm, the range alone 6.60 mm. A causal filter
+/// 6.66 mm, smoother 6.40 mm, the range alone 6.60 mm. A causal filter
 /// cannot do better than follow the range here: the range error persists
 /// for about 4 s, over which the odometry's own walk grows to about a
 /// centimetre.)

@@ -234,6 +234,12 @@ pub fn settings(settled: &Settled) -> Table {
         let threshold = locus_replay::noise::LR_HALF;
         let from = match (r.source, r.search) {
             (From::Given, _) => "given".to_string(),
+            (_, Some(s)) if r.held => format!(
+                "held at 0: white beams explain the log better (maximum likelihood, {} \
+                 replays; the best bias found raises the innovation NLL by {:.1})",
+                s.evaluations,
+                s.nll - s.white_nll
+            ),
             (_, Some(s)) => format!(
                 "estimated from the log (maximum likelihood, {} replays): it lowers the \
                  innovation NLL by {:.1} against white beams searched alike ({} at 99 % beyond \

@@ -16,17 +16,18 @@
 //! log-likelihood ([`Report::innovation_nll`](crate::Report)): the beams'
 //! white noise `sigma_beam`, the bias's stationary standard deviation and
 //! time constant, and `q_v` (the process noise the bias trades against)
-//! unless it was given. The white noise is the nested model (a bias of
-//! `sigma` 0), so the estimate is used whatever it finds: on white beams
-//! the search finds a bias too small to matter. Beside it, the same search
-//! with the bias held (`sigma_beam` and `q_v` alone) says by how much the
-//! bias explains the log better: a likelihood ratio beyond chi-square's
-//! 99 % point with 2 degrees of freedom ([`LR_HALF`]) is
-//! [`BiasEstimate::significant`]. The test is not a gate: a bias kept in
-//! vain costs a little uncertainty, a bias dropped in vain makes the
-//! filter over-confident, and on a log like laser_wall_1d the odometry's
-//! walk explains most of what a persistent range error does, so the
-//! likelihood favours the bias by little even where it is real.
+//! unless it was given. The same search with the bias held (`sigma_beam`
+//! and `q_v` alone) is the nested white model; the estimate is whichever
+//! of the two has the smaller NLL ([`BiasEstimate::chosen`]): on white
+//! beams the search finds a bias too small to matter, or none better. By
+//! how much the bias explains the log better is reported: a likelihood
+//! ratio beyond chi-square's 99 % point with 2 degrees of freedom
+//! ([`LR_HALF`]) is [`BiasEstimate::significant`]. That test is not a
+//! gate: a bias kept in vain costs a little uncertainty, a bias dropped
+//! in vain makes the filter over-confident, and on a log like
+//! laser_wall_1d the odometry's walk explains most of what a persistent
+//! range error does, so the likelihood favours the bias by little even
+//! where it is real.
 
 use core::cell::{Cell, RefCell};
 
@@ -45,7 +46,7 @@ use crate::{Beams, Config, Error, Log};
 pub const LR_HALF: f64 = 4.605_170_185_988_091;
 
 /// Nelder-Mead iterations at most.
-pub const MAX_ITERATIONS: u64 = 200;
+pub const MAX_ITERATIONS: u64 = 100;
 
 /// The search's start for the time constant, in median intervals between
 /// scans.
@@ -80,6 +81,18 @@ impl BiasEstimate {
     #[must_use]
     pub fn significant(&self) -> bool {
         self.white_nll - self.nll > LR_HALF
+    }
+
+    /// The maximum-likelihood choice: `(sigma_beam, bias, q_v)` of the
+    /// search with the bias where its NLL is the smaller, else of the
+    /// white search with the bias held.
+    #[must_use]
+    pub fn chosen(&self) -> (f64, GaussMarkov<f64>, f64) {
+        if self.nll < self.white_nll {
+            (self.sigma_beam, self.bias, self.q_v)
+        } else {
+            (self.white_sigma_beam, Beams::HELD_BIAS, self.white_q_v)
+        }
     }
 }
 
