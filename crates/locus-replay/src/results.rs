@@ -69,6 +69,50 @@ pub struct Replay {
     pub no_measurement: usize,
     /// Odometry records refused as implausible (listed with their line).
     pub implausible_odometry: usize,
+    /// How late the ground truth's stamps were taken to be against the
+    /// sensors, s (0: compared at its stamps; `locus_replay::truth_clock`).
+    pub truth_offset_s: f64,
+    /// The scans of beam sensors and their settings; `None` (absent)
+    /// for a log without scans.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub beams: Option<BeamsSection>,
+}
+
+/// The `beams` object of the `replay` section: the beams' settings and
+/// what the scans' beams did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BeamsSection {
+    /// The beams' white range noise, standard deviation, m.
+    pub sigma_beam_m: f64,
+    /// The range bias's stationary standard deviation, m; `None` (`null`)
+    /// when held at 0.
+    pub range_bias_sigma_m: Option<f64>,
+    /// Its time constant, s; `None` (`null`) when held at 0.
+    pub range_bias_tau_s: Option<f64>,
+    /// Beams a scan spends at most.
+    pub per_scan: u32,
+    /// Scans replayed.
+    pub scans: usize,
+    /// Beams in them.
+    pub beams: u32,
+    /// Beams chosen.
+    pub chosen: u32,
+    /// Chosen beams applied.
+    pub applied: u32,
+    /// Of them, applied with a Student-t weight below 1.
+    pub down_weighted: u32,
+    /// Chosen beams the gate rejected.
+    pub gated: u32,
+    /// Chosen beams with no return or no valid reading.
+    pub no_return: u32,
+    /// Chosen beams whose cast met no surface within range, or met it
+    /// grazing.
+    pub no_surface: u32,
+    /// Chosen beams read far shorter than the map's range (something not
+    /// in the map).
+    pub short: u32,
+    /// Chosen beams the filter could not use.
+    pub unusable: u32,
 }
 
 impl Section {
@@ -101,8 +145,36 @@ impl Section {
                 implausible_time: r.implausible_time,
                 no_measurement: r.no_measurement,
                 implausible_odometry: r.implausible_odometry,
+                truth_offset_s: 0.0,
+                beams: (r.scans > 0).then(|| {
+                    let held = cfg.beams.bias == crate::Beams::HELD_BIAS;
+                    let b = r.beams;
+                    BeamsSection {
+                        sigma_beam_m: cfg.beams.sigma,
+                        range_bias_sigma_m: (!held).then_some(cfg.beams.bias.sigma),
+                        range_bias_tau_s: (!held).then_some(cfg.beams.bias.tau),
+                        per_scan: cfg.beams.per_scan,
+                        scans: r.scans,
+                        beams: b.beams,
+                        chosen: b.chosen,
+                        applied: b.applied,
+                        down_weighted: b.down_weighted,
+                        gated: b.gated,
+                        no_return: b.no_return,
+                        no_surface: b.no_surface,
+                        short: b.short,
+                        unusable: b.unusable,
+                    }
+                }),
             },
         }
+    }
+
+    /// The section with the truth's clock the replay compared at.
+    #[must_use]
+    pub fn with_truth_clock(mut self, clock: Option<&crate::truth_clock::TruthClock>) -> Self {
+        self.replay.truth_offset_s = clock.filter(|c| c.applied).map_or(0.0, |c| c.offset);
+        self
     }
 }
 

@@ -194,6 +194,20 @@ fn every_source_writes_metrics_that_validate_against_the_schema() {
     }
     if let Some((_, m)) = files.iter().find(|(n, _)| n == "intel relations") {
         assert!(m["relations"]["smoother"]["compared"].is_u64(), "{m:#}");
+        // A log with scans has the beams' object; its counts add up.
+        let b = &m["replay"]["beams"];
+        assert_eq!(b["scans"], 910, "{b:#}");
+        assert_eq!(b["per_scan"], 30, "{b:#}");
+        assert!(b["applied"].as_u64() <= b["chosen"].as_u64(), "{b:#}");
+    }
+    // A log without scans has none.
+    for (name, m) in &files {
+        if let Some(r) = m.get("replay")
+            && name != "intel relations"
+        {
+            assert!(r.get("beams").is_none(), "{name}: {r:#}");
+            assert_eq!(r["truth_offset_s"], 0.0, "{name}");
+        }
     }
     let _ = fs::remove_dir_all(&dir);
 }

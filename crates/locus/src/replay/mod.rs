@@ -124,7 +124,7 @@ fn execute(
     bar.finish_and_clear();
 
     let results = Results::of(&report.summary).with_smoother(report.smoothed.as_ref());
-    let section = Section::new(cfg, &report);
+    let section = Section::new(cfg, &report).with_truth_clock(clock.as_ref());
     let judged = reference
         .zip(at_scans.as_ref())
         .map(|(r, at)| r.judge(at, cfg.smooth));
