@@ -24,8 +24,15 @@
 //! event (scan or raw `ODOM`) takes the smallest stamp of itself and every
 //! event after it (a stamp that is late is pulled back; [`Carmen::retimed`]
 //! counts the stamps changed and [`Carmen::largest_retime`] the largest
-//! change). [`Carmen::scan_stamps`] keeps the scans' stamps as recorded, to
-//! match other files' times against.
+//! change). A scan pulled back to within [`MIN_DT`] of the scan before it
+//! would squeeze the motion between them into that instant (turns of
+//! hundreds of rad/s, which a replay refuses as implausible); it moves to
+//! midway between the scans around it when they are at least twice
+//! [`MIN_DT`] apart: the raw poses before it are spread in proportion over
+//! the longer span, and those after it stamped before its new time take
+//! that time ([`Carmen::respaced`] counts the scans moved). [`Carmen::scan_stamps`]
+//! keeps the scans' stamps as recorded, to match other files' times
+//! against.
 //!
 //! **Odometry.** Between two scans, the raw poses whose converted time is
 //! later than the pose kept before them are kept (a pose stamped no later
@@ -92,6 +99,9 @@ pub struct Carmen {
     pub retimed: usize,
     /// The largest change of a stamp, s (0 if none).
     pub largest_retime: f64,
+    /// Scans moved to midway between their neighbours, having been pulled
+    /// back to within [`MIN_DT`] of the scan before.
+    pub respaced: usize,
     /// Segments between scans whose motion could not be given a duration
     /// (left out of the odometry).
     pub timeless_segments: usize,
@@ -213,6 +223,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Carmen> {
         }
         next = *t;
     }
+    let respaced = respace(&mut events);
     let sensor = BeamSensor {
         id: 0,
         mount: SensorMount {
@@ -295,8 +306,45 @@ pub fn parse(text: &str, path: &Path) -> Result<Carmen> {
         raw_motion,
         retimed,
         largest_retime,
+        respaced,
         timeless_segments,
     })
+}
+
+/// Moves each scan within [`MIN_DT`] of the scan before it to midway
+/// between the scans around it, where those are at least twice [`MIN_DT`]
+/// apart; the events between the two scans are spread in proportion over
+/// the longer span (all to the new time if the span was empty), and the
+/// events after it stamped before its new time take that time. Times stay
+/// non-decreasing. Returns the scans moved.
+fn respace(events: &mut [(f64, Event)]) -> usize {
+    let scans: Vec<usize> = events
+        .iter()
+        .enumerate()
+        .filter(|(_, (_, e))| matches!(e, Event::Scan(_)))
+        .map(|(i, _)| i)
+        .collect();
+    let mut moved = 0;
+    for w in scans.windows(3) {
+        let (a, k, c) = (w[0], w[1], w[2]);
+        let (ta, tk, tc) = (events[a].0, events[k].0, events[c].0);
+        if tk - ta < MIN_DT && tc - ta >= 2.0 * MIN_DT {
+            let t = 0.5 * (ta + tc);
+            events[k].0 = t;
+            for e in &mut events[a + 1..k] {
+                e.0 = if tk > ta {
+                    ta + (e.0 - ta) * (t - ta) / (tk - ta)
+                } else {
+                    t
+                };
+            }
+            for e in &mut events[k + 1..c] {
+                e.0 = e.0.max(t);
+            }
+            moved += 1;
+        }
+    }
+    moved
 }
 
 /// Shortest chord an odometry increment spans, m, unless it ends a
@@ -434,6 +482,45 @@ mod tests {
         // Nothing after the last scan, nothing before the first.
         assert!(log.odometry.iter().all(|o| (0.9..=3.0).contains(&o.time)));
         assert_eq!(c.timeless_segments, 0);
+        assert_eq!(c.respaced, 0);
+    }
+
+    /// A scan stamped after the next one is pulled back to 10 ms after the
+    /// scan before it; it moves to midway between its neighbours, the
+    /// turn before it spans that time, and dead reckoning still reaches
+    /// each scan's raw motion.
+    #[test]
+    fn a_scan_squeezed_against_the_one_before_moves_midway() {
+        let squeezed = "FLASER 2 1 1 0 0 0 0 0 0 1 h 1\n\
+            ODOM 0 0 0 0 0 0 0 h 0\n\
+            ODOM 0.05 0 0.3 0 0 0 1.5 h 1.5\n\
+            ODOM 0.1 0 0.6 0 0 0 1.9 h 1.9\n\
+            FLASER 2 1 1 0.1 0 0.6 0.1 0 0.6 2.5 h 2.5\n\
+            ODOM 0.1 0 0.6 0 0 0 0 h 0\n\
+            ODOM 0.2 0.05 0.6 0 0 0 1.01 h 1.01\n\
+            ODOM 0.3 0.1 0.6 0 0 0 2.9 h 2.9\n\
+            FLASER 2 1 1 0.3 0.1 0.6 0.3 0.1 0.6 3 h 3\n";
+        let c = parse(squeezed, p()).unwrap();
+        let times = c.log.scans.times().to_vec();
+        // Pulled back to 1.01 s (the ODOM after it), then moved midway
+        // between 1 s and 3 s.
+        assert_eq!(times, [1.0, 2.0, 3.0]);
+        assert_eq!(c.respaced, 1);
+        // 0.6 rad and 0.1 m over a second, not 10 ms: within a replay's
+        // generic limits (locus_models::plausible::Limits::GENERIC, 4 pi
+        // rad/s and 10 m/s; before the move, a turn of 120 rad/s).
+        for o in &c.log.odometry {
+            assert!(
+                o.omega.abs() < 4.0 * core::f64::consts::PI && o.v.abs() < 10.0,
+                "{o:?}"
+            );
+        }
+        for (k, want) in c.raw_motion.iter().enumerate() {
+            let got = dead_reckon(&c.log.odometry, times[k], times[k + 1]);
+            for i in 0..3 {
+                assert!((got[i] - want[i]).abs() < 1e-12, "{k}: {got:?} {want:?}");
+            }
+        }
     }
 
     #[test]
