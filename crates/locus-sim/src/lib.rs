@@ -11,6 +11,7 @@
 //! robot of the link (`locus-simlink`).
 #![forbid(unsafe_code)]
 
+pub mod beam_log;
 pub mod closed_loop;
 mod error;
 pub mod family;
@@ -32,5 +33,5 @@ pub use error::Error;
 pub use robot::{
     DriveCommand, Kinematics, Pose, Robot, RobotError, Slip, SlipSchedule, TravelByWheel,
 };
-pub use sensors::{Encoder, IrPairSensor, Laser, SensorError, SharpIr};
+pub use sensors::{Encoder, IrPairSensor, IrReading, Laser, SensorError, SharpIr};
 pub use world::{Hit, World};

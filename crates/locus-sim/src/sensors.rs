@@ -314,8 +314,52 @@ impl SharpIr {
     /// A noisy reading converted back to distance through the curve (m), as
     /// the firmware reports it; `None` as for [`read_raw`](Self::read_raw).
     pub fn read(&self, distance: f64, rng: &mut StdRng) -> Option<f64> {
-        self.read_raw(distance, rng)
-            .map(|raw| self.distance_from_raw(raw))
+        self.reading(distance, rng).distance()
+    }
+
+    /// What the sensor reads for the true distance `distance` (m): the
+    /// reading of [`read`](Self::read), or why there is none (the noisy
+    /// distance beyond the useful range, or not finite: no return; below
+    /// it: no valid reading). Draws one value from `rng`, as `read` does.
+    pub fn reading(&self, distance: f64, rng: &mut StdRng) -> IrReading {
+        let noisy = distance + gauss(rng, self.sigma);
+        self.classify(noisy)
+    }
+
+    /// The reading of a noisy distance `noisy` (m): through the curve in
+    /// the useful range, else [`IrReading::Beyond`] (above it, or not a
+    /// number) or [`IrReading::Below`].
+    pub fn classify(&self, noisy: f64) -> IrReading {
+        if noisy >= self.min_range && noisy <= self.max_range {
+            IrReading::Distance(self.distance_from_raw(self.raw_from_distance(noisy)))
+        } else if noisy < self.min_range {
+            IrReading::Below
+        } else {
+            IrReading::Beyond
+        }
+    }
+}
+
+/// What one IR sensor read in a step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum IrReading {
+    /// A distance in the useful range, m.
+    Distance(f64),
+    /// Nothing within the useful range: no return (the wall beyond it, or
+    /// no wall along the beam).
+    Beyond,
+    /// Closer than the useful range: no valid reading.
+    Below,
+}
+
+impl IrReading {
+    /// The distance, if the sensor read one (m).
+    #[must_use]
+    pub fn distance(self) -> Option<f64> {
+        match self {
+            IrReading::Distance(d) => Some(d),
+            IrReading::Beyond | IrReading::Below => None,
+        }
     }
 }
 
@@ -417,11 +461,27 @@ impl IrPairSensor {
         pose: [f64; 3],
         rng: &mut StdRng,
     ) -> Result<Option<(f64, f64)>, SensorError> {
+        let [r1, r2] = self.read_each(walls, pose, rng)?;
+        Ok(r1.distance().zip(r2.distance()))
+    }
+
+    /// What each sensor read, `[s1, s2]`: the readings [`read`](Self::read)
+    /// pairs (the same two draws from `rng`, s1 then s2), with why a
+    /// sensor read nothing.
+    ///
+    /// # Errors
+    /// [`SensorError::NonFinite`] if the pose is not finite.
+    pub fn read_each(
+        &self,
+        walls: &[Segment<f64>],
+        pose: [f64; 3],
+        rng: &mut StdRng,
+    ) -> Result<[IrReading; 2], SensorError> {
         let (t1, t2) = self.true_distances(walls, pose)?;
         // Far beyond any useful range: the sensor reads nothing.
-        let d1 = self.front.read(t1.unwrap_or(f64::INFINITY), rng);
-        let d2 = self.rear.read(t2.unwrap_or(f64::INFINITY), rng);
-        Ok(d1.zip(d2))
+        let r1 = self.front.reading(t1.unwrap_or(f64::INFINITY), rng);
+        let r2 = self.rear.reading(t2.unwrap_or(f64::INFINITY), rng);
+        Ok([r1, r2])
     }
 }
 

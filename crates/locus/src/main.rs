@@ -83,7 +83,7 @@ enum Command {
     /// docs/log-format.md; `.xz` read directly). Late sightings are applied
     /// at their own time. Prints the summary against ground truth beside
     /// odometry alone, writes `log.csv`, `metrics.json` and pictures.
-    Replay(replay::Args),
+    Replay(Box<replay::Args>),
     /// Build an occupancy grid from scans taken at known poses (log-odds
     /// mapping), to localise in afterwards: from a Locus CSV log with beam
     /// sensors, scans and ground truth with heading (each scan at the

@@ -14,7 +14,7 @@ use rand::rngs::StdRng;
 use super::{Error, SquareConfig};
 use crate::noise::gauss;
 use crate::robot::{DriveCommand, Kinematics, Pose, Robot, SlipSchedule, Wheel};
-use crate::sensors::{Encoder, IrPairSensor, SharpIr};
+use crate::sensors::{Encoder, IrPairSensor, IrReading, SharpIr};
 use crate::world::World;
 
 impl SquareConfig {
@@ -177,41 +177,59 @@ impl Plant {
         self.truth = Pose::new(x[0], x[1], x[2]);
     }
 
-    /// The realistic mode's IR readings `(d_s1, d_s2)` (m) on the true
-    /// walls, through the sensor curve, when both are in range.
+    /// The realistic mode's IR readings on the true walls, through the
+    /// sensor curve: each sensor's `[s1, s2]`, and the pair `(d_s1, d_s2)`
+    /// (m) when both are in range.
     ///
     /// # Errors
     /// A sensor error.
-    pub(super) fn read_ir(&mut self) -> Result<IrReadings, Error> {
+    pub(super) fn read_ir(&mut self) -> Result<(IrReadings, [IrReading; 2]), Error> {
         let t = self.truth;
-        Ok(self
+        let each = self
             .ir
-            .read(&self.world.walls, [t.x, t.y, t.theta], &mut self.rng)?)
+            .read_each(&self.world.walls, [t.x, t.y, t.theta], &mut self.rng)?;
+        Ok((each[0].distance().zip(each[1].distance()), each))
     }
 
     /// The ideal mode's IR pair: draws the reading noise
     /// `n ~ N(0, diag(R11, R22))` (always, so the random stream does not
     /// depend on what the sensor sees), then returns the readings (the
     /// noise-free ones plus `n`) and the observation with its `z`, when the
-    /// truth's pair sees a wall (see [`ideal_observation`]).
+    /// truth's pair sees a wall (see [`ideal_observation`]), and what each
+    /// sensor read: its noise-free distance plus its `n` when that
+    /// distance is in the useful range.
     ///
     /// # Errors
     /// A sensor error.
     pub(super) fn observe_ideal(
         &mut self,
         cfg: &SquareConfig,
-    ) -> Result<(IrReadings, Option<IdealObservation>), Error> {
+    ) -> Result<(IrReadings, [IrReading; 2], Option<IdealObservation>), Error> {
         let noise = Vector2::new(
             gauss(&mut self.rng, cfg.r11.sqrt()),
             gauss(&mut self.rng, cfg.r22.sqrt()),
         );
+        let x = &self.true_x;
+        let (t1, t2) = self
+            .ir
+            .true_distances(&self.world.walls, [x[0], x[1], x[2]])?;
+        let each = |t: Option<f64>, s: &SharpIr, n: f64| match t {
+            Some(d) if d < s.min_range => IrReading::Below,
+            Some(d) if d <= s.max_range => IrReading::Distance(d + n),
+            _ => IrReading::Beyond,
+        };
+        let each = [
+            each(t1, &self.ir.front, noise[0]),
+            each(t2, &self.ir.rear, noise[1]),
+        ];
         Ok(
             match ideal_observation(cfg, &self.ir, &self.world, &self.true_x, &noise)? {
                 Some((obs, z)) => (
                     Some((obs.ds1 + noise[0], obs.ds2 + noise[1])),
+                    each,
                     Some((obs, z)),
                 ),
-                None => (None, None),
+                None => (None, each, None),
             },
         )
     }

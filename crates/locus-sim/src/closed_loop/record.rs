@@ -4,6 +4,7 @@
 use locus_core::wrap_angle;
 
 use crate::robot::Pose;
+use crate::sensors::IrReading;
 use locus_eval::{Record, Sample, columns};
 
 /// What one step of the closed loop produced (SI units, world frame).
@@ -25,6 +26,11 @@ pub struct StepRecord {
     pub wheel_travel: [f64; 2],
     /// IR readings `(d_s1, d_s2)` (m) when both were in range.
     pub ir: Option<(f64, f64)>,
+    /// What each IR sensor read, `[s1, s2]` (front, rear): a distance
+    /// (m), or why it read none. [`StepRecord::ir`] is the pair of them
+    /// when both read a distance (in the ideal mode, when the truth's pair
+    /// also sees one wall).
+    pub ir_each: [IrReading; 2],
     /// Innovation `z - h(X-)` `[m, rad]` when a reading was associated with
     /// a wall.
     pub innovation: Option<[f64; 2]>,

@@ -8,7 +8,7 @@ use locus_models::{IrCorrection, IrOutcome, IrPairObservation, Localiser, WheelT
 use super::plant::{IrReadings, Plant};
 use super::{Error, LiveParams, NoiseModel, SimStep, SquareConfig, StepRecord, Teleop};
 use crate::robot::Pose;
-use crate::sensors::IrPairSensor;
+use crate::sensors::{IrPairSensor, IrReading};
 use crate::world::World;
 use locus_eval::{Record, Summary, Tally};
 use locus_eval::{matrix3, planar_nees};
@@ -179,14 +179,14 @@ impl SquareSim {
         };
         let (v1, v2) = wheel_speeds(twist, self.cfg.wheelbase);
         let u = self.predict((v1, v2))?;
-        let (reading, corrected) = self.correct()?;
+        let (reading, each, corrected) = self.correct()?;
         let gate = self.localiser.filter.rules().ekf.gate;
         let detail = corrected
             .filter(|_| self.details)
             .and_then(|c| c.detail(&before, [u.d1, u.d2], gate.map(|g| g.threshold(2))));
         self.steps += 1;
         Ok(Some(SimStep {
-            record: self.record(&u, reading, corrected.as_ref()),
+            record: self.record(&u, (reading, each), corrected.as_ref()),
             twist: (twist.v, twist.w),
             wheel_speeds: (v1, v2),
             teleop: teleop.is_some(),
@@ -250,12 +250,12 @@ impl SquareSim {
         Ok(u)
     }
 
-    /// Step 5: the IR pair's readings (for the log) and, when they were
-    /// associated with a wall and the filter uses IR, the correction of the
-    /// localiser behind its gate. Realistic mode: the localiser associates
-    /// on its estimate ([`Localiser::ir`]); ideal mode: the plant's
-    /// observation, associated on the truth.
-    fn correct(&mut self) -> Result<(IrReadings, Option<IrCorrection>), Error> {
+    /// Step 5: the IR pair's readings and each sensor's (for the log) and,
+    /// when they were associated with a wall and the filter uses IR, the
+    /// correction of the localiser behind its gate. Realistic mode: the
+    /// localiser associates on its estimate ([`Localiser::ir`]); ideal
+    /// mode: the plant's observation, associated on the truth.
+    fn correct(&mut self) -> Result<(IrReadings, [IrReading; 2], Option<IrCorrection>), Error> {
         let use_ir = self.cfg.use_ir;
         let prior = *self.localiser.belief();
         let corrected = |observation: IrPairObservation<f64>, z, update| IrCorrection {
@@ -265,16 +265,16 @@ impl SquareSim {
             update,
         };
         if self.cfg.noise == NoiseModel::Ideal {
-            let (reading, observed) = self.plant.observe_ideal(&self.cfg)?;
+            let (reading, each, observed) = self.plant.observe_ideal(&self.cfg)?;
             let Some((obs, z)) = observed.filter(|_| use_ir) else {
-                return Ok((reading, None));
+                return Ok((reading, each, None));
             };
             let update = self.localiser.filter.correct(&obs, &z)?;
-            return Ok((reading, Some(corrected(obs, z, update))));
+            return Ok((reading, each, Some(corrected(obs, z, update))));
         }
-        let reading = self.plant.read_ir()?;
+        let (reading, each) = self.plant.read_ir()?;
         let Some((ds1, ds2)) = reading.filter(|_| use_ir) else {
-            return Ok((reading, None));
+            return Ok((reading, each, None));
         };
         Ok(
             match self.localiser.ir(&self.plant.world.walls, [ds1, ds2])? {
@@ -283,9 +283,10 @@ impl SquareSim {
                     update,
                 } => (
                     reading,
+                    each,
                     Some(corrected(observation, observation.z(), update)),
                 ),
-                IrOutcome::Unassociated => (reading, None),
+                IrOutcome::Unassociated => (reading, each, None),
             },
         )
     }
@@ -295,7 +296,7 @@ impl SquareSim {
     fn record(
         &self,
         u: &WheelTravel<f64>,
-        reading: IrReadings,
+        (reading, each): (IrReadings, [IrReading; 2]),
         corrected: Option<&IrCorrection>,
     ) -> StepRecord {
         let belief = self.localiser.belief();
@@ -312,6 +313,7 @@ impl SquareSim {
             odometry: [odo[0], odo[1], odo[2]],
             wheel_travel: [u.d1, u.d2],
             ir: reading,
+            ir_each: each,
             innovation: first.map(|c| [c.innovation[0], c.innovation[1]]),
             nis: first.map(|c| c.nis),
             applied: corrected.is_some_and(|c| c.update.applied()),

@@ -76,5 +76,5 @@ mod table3;
 
 pub use config::{INSTANTS, LaserModel, PAPER_TABLE3, Wall45Config, Wall45Noise};
 pub use record::{LaserCorrection, Wall45Record};
-pub use run::run_wall45;
+pub use run::{run_wall45, true_start};
 pub use table3::{InstantStats, Table3, table3};

@@ -73,6 +73,31 @@ fn path(cfg: &Wall45Config) -> Vec<Segment> {
     out
 }
 
+/// The true start of a run: the first draws of its random stream (the
+/// ideal mode's start from `N(X0, P0)`, drawn whatever the mode so both
+/// modes share the rest of the stream's layout), or the origin in the
+/// realistic mode.
+fn draw_start(cfg: &Wall45Config, rng: &mut StdRng) -> Vector3<f64> {
+    let (x0, sd) = (cfg.start_estimate, cfg.initial_std);
+    let drawn = Vector3::new(
+        x0[0] + gauss(rng, sd[0]),
+        x0[1] + gauss(rng, sd[1]),
+        wrap_angle(x0[2] + gauss(rng, sd[2])),
+    );
+    if cfg.noise == Wall45Noise::Ideal {
+        drawn
+    } else {
+        Vector3::zeros()
+    }
+}
+
+/// The true pose of a run of `cfg` from `seed` at its start (before its
+/// first step), as [`run_wall45`] draws it.
+#[must_use]
+pub fn true_start(cfg: &Wall45Config, seed: u64) -> Pose<f64> {
+    Pose::from_vector(&draw_start(cfg, &mut StdRng::seed_from_u64(seed)))
+}
+
 /// Runs `wall45` with `cfg` from `seed`, calling `sink` with every step's
 /// record as the run goes, and returns the summary (3-dof NEES).
 ///
@@ -95,14 +120,7 @@ pub fn run_wall45(
     let p0 = Matrix3::from_diagonal(&Vector3::new(sd[0] * sd[0], sd[1] * sd[1], sd[2] * sd[2]));
     let mut belief = Belief::new(x0, p0);
     let mut odo = belief;
-    // Draw the ideal start whatever the mode, so both modes share the rest
-    // of the random stream's layout.
-    let drawn = Vector3::new(
-        x0[0] + gauss(&mut rng, sd[0]),
-        x0[1] + gauss(&mut rng, sd[1]),
-        wrap_angle(x0[2] + gauss(&mut rng, sd[2])),
-    );
-    let mut true_x = if ideal { drawn } else { Vector3::zeros() };
+    let mut true_x = draw_start(cfg, &mut rng);
 
     let true_track = cfg.track * (1.0 + cfg.track_error);
     let mut robot = Robot::new(

@@ -276,6 +276,18 @@ pub struct Flags {
     /// `--v-scale`).
     #[arg(long, default_value_t = 1.0, value_parser = super::positive_f64)]
     pub omega_scale: f64,
+    /// Hold the calibration states at their initial values (the speed and
+    /// turn-rate scales at --v-scale and --omega-scale, the turn-rate,
+    /// bearing and range biases at 0: standard deviation 1e-12, no random
+    /// walk): the filter of the pose alone, as the simulator's closed
+    /// loops are. The default noise estimation may still free a bias the
+    /// log tells; with --no-estimate every state stays held.
+    #[arg(long)]
+    pub hold_calibration: bool,
+    /// Standard deviations of the initial estimate: x (m), y (m) and
+    /// heading (rad), comma-separated. Default 0.05,0.05,0.05.
+    #[arg(long, value_name = "SX,SY,STHETA", value_parser = three_positive)]
+    pub initial_std: Option<[f64; 3]>,
     /// Student-t degrees of freedom of the sightings' noise: sightings far
     /// from the prediction are down-weighted rather than only gated.
     #[arg(long, default_value_t = 4.0, value_parser = super::positive_f64)]
@@ -338,6 +350,24 @@ impl Flags {
     /// The replay's settings other than the noise and the odometry delay
     /// (settled by `locus_replay::policy`).
     pub fn config(&self) -> Config {
+        let defaults = Config::default();
+        let mut calibration = locus_replay::Calibration {
+            initial: [self.v_scale, self.omega_scale, 0.0, 0.0],
+            ..locus_replay::Calibration::default()
+        };
+        let mut beams = locus_replay::Beams {
+            per_scan: self.beams_per_scan,
+            ..locus_replay::Beams::default()
+        };
+        if self.hold_calibration {
+            calibration.std = [HELD_STD; 4];
+            calibration.walk = [0.0; 4];
+            beams.bias = GaussMarkov {
+                sigma: HELD_STD,
+                tau: f64::INFINITY,
+            };
+        }
+        let initial_std = self.initial_std.unwrap_or(defaults.initial_std);
         Config {
             gate: (!self.no_gate).then_some(self.gate),
             robust_dof: (!self.no_robust).then_some(self.robust_dof),
@@ -347,21 +377,16 @@ impl Flags {
             } else {
                 Start::Log
             },
-            calibration: locus_replay::Calibration {
-                initial: [self.v_scale, self.omega_scale, 0.0, 0.0],
-                ..locus_replay::Calibration::default()
-            },
-            beams: locus_replay::Beams {
-                per_scan: self.beams_per_scan,
-                ..locus_replay::Beams::default()
-            },
+            calibration,
+            beams,
+            initial_std,
             limits: Limits {
                 max_speed: self.max_speed,
                 max_turn_rate: self.max_turn_rate,
                 max_odometry_gap: self.max_odometry_gap,
                 ..Limits::GENERIC
             },
-            ..Config::default()
+            ..defaults
         }
     }
 
@@ -391,6 +416,27 @@ impl Flags {
         }
     }
 }
+
+/// Three numbers, each finite and > 0, separated by commas (`0.01,0.01,0.02`).
+fn three_positive(text: &str) -> Result<[f64; 3], String> {
+    let values = text
+        .split(',')
+        .map(|t| super::positive_f64(t.trim()))
+        .collect::<Result<Vec<f64>, String>>()?;
+    <[f64; 3]>::try_from(values.as_slice()).map_err(|_| {
+        format!(
+            "expected three values separated by commas, got {}",
+            values.len()
+        )
+    })
+}
+
+/// The standard deviation of a calibration state held by
+/// `--hold-calibration` (in the state's unit): small enough that the
+/// covariance it leaves is below rounding against the pose's (a turn-rate
+/// bias of 1e-6 rad/s, the default's held value, grows a heading
+/// uncertainty of 1.6e-4 rad over 160 s; one of 1e-12, 1.6e-10 rad).
+pub const HELD_STD: f64 = 1e-12;
 
 /// The replay's settings other than the noise and the odometry delay for
 /// `locus replay csv FILE` with no flags (the flags' defaults, parsed as

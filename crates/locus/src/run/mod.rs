@@ -22,11 +22,14 @@ use locus_core::wrap_angle;
 use locus_eval::results::Results;
 use locus_eval::{Record, Sample, Summary};
 use locus_models::laser_wall::Segment;
-use locus_sim::closed_loop::{SquareConfig, run_square};
+use std::sync::Mutex;
+
+use locus_sim::beam_log::{SquareLog, Wall45Log};
+use locus_sim::closed_loop::{SquareConfig, StepRecord, run_square};
 use locus_sim::hover::run_hover;
 use locus_sim::scenario_file::ScenarioConfig;
 use locus_sim::tricycle_slip::{TricycleSlipRecord, room, run_tricycle_slip};
-use locus_sim::wall45::run_wall45;
+use locus_sim::wall45::{Wall45Config, Wall45Record, run_wall45};
 
 pub(crate) use self::monte_carlo::seeds;
 use crate::args::ScenarioArg;
@@ -72,6 +75,15 @@ pub struct RunArgs {
     /// and `metrics.json`.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Also write the run as a Locus log (docs/log-format.md, v4) to
+    /// this file: the walls, each range sensor as a beam sensor (paper
+    /// 001's two IR sensors, paper 000's laser) with its readings as scan
+    /// records, the odometry the filter used as speed and turn rate, the
+    /// truth, the start and the filter's noise; `locus replay csv FILE`
+    /// replays it (docs/replay.md, "A simulated run as a log"). For
+    /// `square`, `square-ideal` and `wall45`, one run.
+    #[arg(long, value_name = "FILE", conflicts_with = "runs")]
+    export_log: Option<PathBuf>,
     /// Pictures of a single run.
     #[command(flatten)]
     pictures: PictureArgs,
@@ -150,6 +162,33 @@ fn square_info(name: &str, cfg: &SquareConfig) -> Info {
     }
 }
 
+/// The [`Info`] of a `wall45` scenario.
+fn wall45_info(name: String, cfg: &Wall45Config) -> Info {
+    Info::scenario(
+        name,
+        cfg.dt,
+        locus_sim::World::wall45(cfg.wall_a).walls,
+        (
+            "paper 000 skid-steer robot, laser at the 45-degree wall (Table III path)",
+            "EKF (odometry + laser)",
+            "laser",
+        ),
+    )
+}
+
+/// Writes `log` to `path` in the Locus log format and says so.
+fn export_log(path: &Path, log: &locus_logs::locus_csv::LocusLog) -> Result<()> {
+    std::fs::write(path, locus_logs::locus_csv::write(log))
+        .with_context(|| format!("writing {}", path.display()))?;
+    print_out(&format!(
+        "Locus log (beam records): {} ({} odometry, {} scans; replay: locus replay csv {})\n",
+        path.display(),
+        log.odometry.len(),
+        log.scans.len(),
+        path.display()
+    ))
+}
+
 /// The scenario named on the command line: its name (a built-in name, or
 /// the file's stem) and configuration.
 fn resolve(arg: &ScenarioArg) -> Result<(String, ScenarioConfig)> {
@@ -183,25 +222,49 @@ pub fn run(args: &RunArgs) -> Result<()> {
         ScenarioConfig::Square(base) => {
             let cfg = square_config(args, base)?;
             let info = square_info(&name, &cfg);
-            execute(args, &info, &out, |seed, mut sink| {
-                run_square(&cfg, seed, &mut sink)
-            })
+            let Some(path) = &args.export_log else {
+                return execute(args, &info, &out, |seed, mut sink| {
+                    run_square(&cfg, seed, &mut sink)
+                });
+            };
+            let log = Mutex::new(SquareLog::new(&cfg, args.seed)?);
+            execute(args, &info, &out, |seed, sink| {
+                run_square(&cfg, seed, &mut |r: &StepRecord| {
+                    if let Ok(mut log) = log.lock() {
+                        log.push(r);
+                    }
+                    sink(r);
+                })
+            })?;
+            let log = log
+                .into_inner()
+                .map_err(|_| anyhow::anyhow!("a run panicked"))?;
+            export_log(path, &log.finish())
         }
         ScenarioConfig::Wall45(cfg) => {
-            let info = Info::scenario(
-                name,
-                cfg.dt,
-                locus_sim::World::wall45(cfg.wall_a).walls,
-                (
-                    "paper 000 skid-steer robot, laser at the 45-degree wall (Table III path)",
-                    "EKF (odometry + laser)",
-                    "laser",
-                ),
-            );
-            execute(args, &info, &out, |seed, mut sink| {
-                run_wall45(&cfg, seed, &mut sink)
-            })
+            let info = wall45_info(name, &cfg);
+            let Some(path) = &args.export_log else {
+                return execute(args, &info, &out, |seed, mut sink| {
+                    run_wall45(&cfg, seed, &mut sink)
+                });
+            };
+            let log = Mutex::new(Wall45Log::new(&cfg, args.seed)?);
+            execute(args, &info, &out, |seed, sink| {
+                run_wall45(&cfg, seed, &mut |r: &Wall45Record| {
+                    if let Ok(mut log) = log.lock() {
+                        log.push(r);
+                    }
+                    sink(r);
+                })
+            })?;
+            let log = log
+                .into_inner()
+                .map_err(|_| anyhow::anyhow!("a run panicked"))?;
+            export_log(path, &log.finish())
         }
+        _ if args.export_log.is_some() => anyhow::bail!(
+            "--export-log: only the square, square-ideal and wall45 scenarios can be written as a log"
+        ),
         ScenarioConfig::TricycleSlip(cfg) => {
             let info = Info::scenario(
                 name,
