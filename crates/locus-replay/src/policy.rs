@@ -19,9 +19,14 @@
 //! moves); it is held at 0 and reported as held. A bias the log tells is
 //! estimated by the replay from its prior, with the uncertainty the filter
 //! gives it.
+//!
+//! For a log with scans, the beams' range bias (a Gauss-Markov state) is
+//! given ([`Overrides::beam_bias`]), or searched with the beams' white
+//! noise when that noise is estimated ([`crate::noise::estimate_bias`]:
+//! maximum likelihood, the nested white model its alternative), else held
+//! at 0 ([`RangeBiasSetting`]).
 
 use locus_logs::NoiseRecords;
-
 use locus_models::calibrated_unicycle::GaussMarkov;
 
 use crate::{Config, Error, Log};

@@ -15,7 +15,9 @@
 //! bias does not count) is the truth's. It is applied only where it is
 //! decisive: the spread at it at most [`DECISIVE`] of the spread at the
 //! stamps (a clock offset worth correcting dominates the residuals; a
-//! few per cent is within what the choice of readings moves it).
+//! few per cent is within what the choice of readings moves it). A long
+//! log is read at an even stride, [`MAX_EVENTS`] scans and as many
+//! sightings at most.
 
 use alloc::vec::Vec;
 
@@ -35,6 +37,9 @@ pub const STEP: f64 = 0.01;
 pub const DECISIVE: f64 = 0.75;
 /// Readings the measurement needs at least.
 pub const MIN_READINGS: usize = 50;
+/// Scans, and sightings, the measurement reads at most: a longer log is
+/// read at an even stride (each trial offset reads them all again).
+pub const MAX_EVENTS: usize = 2000;
 
 /// The truth's clock, as measured and as applied.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -60,7 +65,8 @@ fn residuals(log: &Log, cfg: &Config, offset: f64, out: &mut Vec<f64>) {
     let gap = cfg.truth_max_gap;
     let mut truth = log.truth.cursor();
     if let Some(map) = log.map.as_deref() {
-        for scan in log.scans.iter() {
+        let stride = log.scans.len().div_ceil(MAX_EVENTS).max(1);
+        for scan in log.scans.iter().step_by(stride) {
             let Some(sensor) = log.beam_sensors.iter().find(|b| b.id == scan.sensor) else {
                 continue;
             };
@@ -87,7 +93,8 @@ fn residuals(log: &Log, cfg: &Config, offset: f64, out: &mut Vec<f64>) {
     }
     let mut truth = log.truth.cursor();
     let sensor = Vector2::new(log.sensor.x, log.sensor.y);
-    for z in &log.sightings {
+    let stride = log.sightings.len().div_ceil(MAX_EVENTS).max(1);
+    for z in log.sightings.iter().step_by(stride) {
         let (Some(l), Some(t)) = (
             log.landmark(z.landmark),
             truth.pose_at(z.time + offset, gap),

@@ -42,10 +42,11 @@ use super::nll;
 use crate::{Beams, Config, Error, Log};
 
 /// Half chi-square's 99 % point with 2 degrees of freedom (`ln 100`): the
-/// smallest fall in the innovation NLL that keeps the bias's two values.
+/// fall in the innovation NLL beyond which the bias's two values are
+/// significant.
 pub const LR_HALF: f64 = 4.605_170_185_988_091;
 
-/// Nelder-Mead iterations at most.
+/// Nelder-Mead iterations at most, per simplex search.
 pub const MAX_ITERATIONS: u64 = 100;
 
 /// The search's start for the time constant, in median intervals between
