@@ -229,10 +229,14 @@ impl SquareLog {
             sensors,
         })
     }
+}
+
+impl RunLog for SquareLog {
+    type Record = StepRecord;
 
     /// Adds the step of `record`: its odometry (from the wheel travels the
     /// filter predicted with), its truth and what each IR sensor read.
-    pub fn push(&mut self, record: &StepRecord) {
+    fn push(&mut self, record: &StepRecord) {
         let [d1, d2] = record.wheel_travel;
         let (d, dtheta) = self.model.increments(&WheelTravel { d1, d2 });
         let ranges = [
@@ -249,8 +253,7 @@ impl SquareLog {
     }
 
     /// The log of the steps pushed.
-    #[must_use]
-    pub fn finish(self) -> LocusLog {
+    fn finish(self) -> LocusLog {
         self.builder.finish()
     }
 }
@@ -262,6 +265,17 @@ fn reading(sensor: &BeamSensor, r: IrReading) -> f32 {
         IrReading::Beyond => NO_RETURN,
         IrReading::Below => MISSING,
     }
+}
+
+/// A run written as a Locus log as it goes: each step's record pushed,
+/// the log finished after the last.
+pub trait RunLog {
+    /// The run's step record.
+    type Record;
+    /// Adds the step of `record`.
+    fn push(&mut self, record: &Self::Record);
+    /// The log of the steps pushed.
+    fn finish(self) -> LocusLog;
 }
 
 /// Paper 000's `wall45` run as a Locus log with its laser as a beam sensor
@@ -299,10 +313,14 @@ impl Wall45Log {
             sensor,
         })
     }
+}
+
+impl RunLog for Wall45Log {
+    type Record = Wall45Record;
 
     /// Adds the step of `record`: its odometry (the measured tread
     /// speeds), its truth and the laser's range.
-    pub fn push(&mut self, record: &Wall45Record) {
+    fn push(&mut self, record: &Wall45Record) {
         let [v_l, v_r] = record.tread_speeds;
         let range = record.range.map_or(NO_RETURN, |r| self.sensor.reading(r));
         let s = &record.sample;
@@ -318,8 +336,7 @@ impl Wall45Log {
     }
 
     /// The log of the steps pushed.
-    #[must_use]
-    pub fn finish(self) -> LocusLog {
+    fn finish(self) -> LocusLog {
         self.builder.finish()
     }
 }

@@ -40,7 +40,7 @@ use locus_logs::locus_csv::{self, LocusLog};
 use locus_logs::scans::MISSING;
 use locus_replay::{Config, Log, Report};
 use locus_sim::SquareSim;
-use locus_sim::beam_log::SquareLog;
+use locus_sim::beam_log::{RunLog, SquareLog};
 use locus_sim::closed_loop::{SquareConfig, StepRecord, run_square};
 
 /// One lap of `cfg` from seed 1: the closed loop's records and its log.

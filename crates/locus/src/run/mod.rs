@@ -24,7 +24,7 @@ use locus_eval::{Record, Sample, Summary};
 use locus_models::laser_wall::Segment;
 use std::sync::Mutex;
 
-use locus_sim::beam_log::{SquareLog, Wall45Log};
+use locus_sim::beam_log::{RunLog, SquareLog, Wall45Log};
 use locus_sim::closed_loop::{SquareConfig, StepRecord, run_square};
 use locus_sim::hover::run_hover;
 use locus_sim::scenario_file::ScenarioConfig;
@@ -176,6 +176,37 @@ fn wall45_info(name: String, cfg: &Wall45Config) -> Info {
     )
 }
 
+/// [`execute`] of the one run `--export-log` allows, with each step's
+/// record also pushed into `log`, which is then written to `path`.
+fn execute_exporting<L, E, F>(
+    args: &RunArgs,
+    info: &Info,
+    out: &Path,
+    path: &Path,
+    log: L,
+    runner: F,
+) -> Result<()>
+where
+    L: RunLog + Send,
+    L::Record: Record,
+    E: core::error::Error + Send + Sync + 'static,
+    F: Fn(u64, &mut dyn FnMut(&L::Record)) -> Result<Summary, E> + Sync,
+{
+    let log = Mutex::new(log);
+    execute(args, info, out, |seed, sink| {
+        runner(seed, &mut |r: &L::Record| {
+            if let Ok(mut log) = log.lock() {
+                log.push(r);
+            }
+            sink(r);
+        })
+    })?;
+    let log = log
+        .into_inner()
+        .map_err(|_| anyhow::anyhow!("a run panicked"))?;
+    export_log(path, &log.finish())
+}
+
 /// Writes `log` to `path` in the Locus log format and says so.
 fn export_log(path: &Path, log: &locus_logs::locus_csv::LocusLog) -> Result<()> {
     std::fs::write(path, locus_logs::locus_csv::write(log))
@@ -222,45 +253,27 @@ pub fn run(args: &RunArgs) -> Result<()> {
         ScenarioConfig::Square(base) => {
             let cfg = square_config(args, base)?;
             let info = square_info(&name, &cfg);
-            let Some(path) = &args.export_log else {
-                return execute(args, &info, &out, |seed, mut sink| {
-                    run_square(&cfg, seed, &mut sink)
-                });
-            };
-            let log = Mutex::new(SquareLog::new(&cfg, args.seed)?);
-            execute(args, &info, &out, |seed, sink| {
-                run_square(&cfg, seed, &mut |r: &StepRecord| {
-                    if let Ok(mut log) = log.lock() {
-                        log.push(r);
-                    }
-                    sink(r);
-                })
-            })?;
-            let log = log
-                .into_inner()
-                .map_err(|_| anyhow::anyhow!("a run panicked"))?;
-            export_log(path, &log.finish())
+            let run =
+                |seed, mut sink: &mut dyn FnMut(&StepRecord)| run_square(&cfg, seed, &mut sink);
+            match &args.export_log {
+                None => execute(args, &info, &out, run),
+                Some(path) => {
+                    let log = SquareLog::new(&cfg, args.seed)?;
+                    execute_exporting(args, &info, &out, path, log, run)
+                }
+            }
         }
         ScenarioConfig::Wall45(cfg) => {
             let info = wall45_info(name, &cfg);
-            let Some(path) = &args.export_log else {
-                return execute(args, &info, &out, |seed, mut sink| {
-                    run_wall45(&cfg, seed, &mut sink)
-                });
-            };
-            let log = Mutex::new(Wall45Log::new(&cfg, args.seed)?);
-            execute(args, &info, &out, |seed, sink| {
-                run_wall45(&cfg, seed, &mut |r: &Wall45Record| {
-                    if let Ok(mut log) = log.lock() {
-                        log.push(r);
-                    }
-                    sink(r);
-                })
-            })?;
-            let log = log
-                .into_inner()
-                .map_err(|_| anyhow::anyhow!("a run panicked"))?;
-            export_log(path, &log.finish())
+            let run =
+                |seed, mut sink: &mut dyn FnMut(&Wall45Record)| run_wall45(&cfg, seed, &mut sink);
+            match &args.export_log {
+                None => execute(args, &info, &out, run),
+                Some(path) => {
+                    let log = Wall45Log::new(&cfg, args.seed)?;
+                    execute_exporting(args, &info, &out, path, log, run)
+                }
+            }
         }
         _ if args.export_log.is_some() => anyhow::bail!(
             "--export-log: only the square, square-ideal and wall45 scenarios can be written as a log"
