@@ -120,11 +120,13 @@ fn robot_and_host_run_the_square_over_a_serial_line() {
         .and_then(|s| s.rsplit(' ').next())
         .and_then(|s| s.parse().ok())
         .unwrap_or_else(|| panic!("{robot_out}"));
-    // Every frame the cable carried was applied, none lost. A pty drops
-    // what its reader has not taken when the writer closes it (a UART
-    // driver would drain first), so the frames the robot wrote in the last
-    // milliseconds before its process ended may never cross the cable: as
-    // many as the cable thread lagged behind, a few on a busy machine.
+    // Every frame the cable carried was applied, none lost. Once the
+    // robot's process has ended and closed its pty, a poll on the master
+    // reports a hangup beside the bytes still waiting there, and
+    // serialport's read then refuses to read them (a UART would send what
+    // was written whatever its writer does next). So the frames the robot
+    // wrote in its last milliseconds may never cross the cable: as many as
+    // the cable thread lagged behind, a few on a busy machine.
     assert!(
         applied.contains(&format!("| {carried} / 0 / 0 / 0")),
         "{applied} vs {carried} frames carried, {sent} sent"
