@@ -11,25 +11,8 @@ mod common;
 
 use std::fs;
 use std::path::Path;
-use std::process::Command;
 
 use serde_json::Value;
-
-/// Runs `locus` with `args`, asserts success and returns the standard
-/// output.
-fn locus(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_locus"))
-        .args(args)
-        .output()
-        .expect("run locus");
-    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(
-        out.status.success(),
-        "locus {args:?} failed:\n{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    stdout
-}
 
 /// The cells after the name of the row of the relations' table (in the
 /// replay's output `text`) whose name starts with `name`.
@@ -64,7 +47,7 @@ fn the_intel_lab_against_its_relations() {
     }
     let dir = common::scratch("relations-intel");
     let s = |p: &Path| p.to_str().expect("utf-8").to_owned();
-    locus(&["map", "--carmen", &s(&log), "--out", &s(&dir.join("map"))]);
+    common::locus_ok(&["map", "--carmen", &s(&log), "--out", &s(&dir.join("map"))]);
     let (log, map, relations) = (s(&log), s(&dir.join("map/map.yaml")), s(&relations));
     let replay = |out: &str, extra: &[&str]| {
         // The noise as given (not estimated): the relations' figures of
@@ -86,7 +69,7 @@ fn the_intel_lab_against_its_relations() {
             &out,
         ];
         args.extend_from_slice(extra);
-        locus(&args)
+        common::locus_ok(&args)
     };
     let text = replay("replay", &[]);
     println!("{text}");

@@ -254,20 +254,6 @@ fn with_the_ir_beams_the_replay_tracks_the_truth_near_the_closed_loop() {
     assert!(d[0] > 1e-5, "{d:?}");
 }
 
-/// Runs `locus` with `args`, asserting it succeeds; its standard output.
-fn locus(args: &[&str]) -> String {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_locus"))
-        .args(args)
-        .output()
-        .expect("run locus");
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).expect("utf-8")
-}
-
 /// The estimates `[x, y, theta]` of a `log.csv` by time (10 ms steps):
 /// the last row at each time.
 fn estimates(path: &Path, columns: [&str; 4]) -> HashMap<i64, [f64; 3]> {
@@ -290,7 +276,7 @@ fn locus_run_exports_a_log_that_locus_replay_follows() {
     let dir = common::scratch("sim-beams");
     let file = dir.join("square.csv");
     let (run_out, replay_out) = (dir.join("run"), dir.join("replay"));
-    let said = locus(&[
+    let said = common::locus_ok(&[
         "run",
         "square",
         "--laps",
@@ -302,7 +288,7 @@ fn locus_run_exports_a_log_that_locus_replay_follows() {
         file.to_str().unwrap(),
     ]);
     assert!(said.contains("Locus log (beam records)"), "{said}");
-    let said = locus(&[
+    let said = common::locus_ok(&[
         "replay",
         "csv",
         file.to_str().unwrap(),
@@ -361,7 +347,7 @@ fn locus_run_exports_a_log_that_locus_replay_follows() {
     assert!(err.contains("--runs"), "{err}");
     // Paper 000's laser too.
     let wall = dir.join("wall45.csv");
-    locus(&[
+    common::locus_ok(&[
         "run",
         "wall45",
         "--no-plots",

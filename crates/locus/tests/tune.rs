@@ -2,6 +2,8 @@
 //! on, 4-5 held out) and on Locus CSV logs. By default it combines what
 //! `locus replay` estimates from each tuning log alone, by the median.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -10,19 +12,6 @@ fn data() -> &'static str {
         env!("CARGO_MANIFEST_DIR"),
         "/../../../shared/data/mrclam/MRCLAM_Dataset6"
     )
-}
-
-fn locus(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_locus"))
-        .args(args)
-        .output()
-        .expect("run locus");
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
 }
 
 /// The tuned column of a row of `locus tune`'s values table.
@@ -69,7 +58,7 @@ fn tune_combines_what_the_replay_estimates_from_each_log() {
     for r in ["1", "2", "3", "4"] {
         let out = dir.join(format!("replay-{r}"));
         let csv = dir.join(format!("robot{r}.csv"));
-        locus(&[
+        common::locus_ok(&[
             "replay",
             "mrclam",
             data(),
@@ -84,7 +73,7 @@ fn tune_combines_what_the_replay_estimates_from_each_log() {
         each.push(estimated(&out));
     }
     // MRCLAM: robots 1-3 tuned on, each value their median.
-    let text = locus(&["tune", data()]);
+    let text = common::locus_ok(&["tune", data()]);
     assert!(
         text.contains("objective estimate,") && text.contains("held out"),
         "{text}"
@@ -102,7 +91,7 @@ fn tune_combines_what_the_replay_estimates_from_each_log() {
     // Locus CSV logs: one tuned on (its own estimate), one held out.
     let r1 = dir.join("robot1.csv");
     let r4 = dir.join("robot4.csv");
-    let text = locus(&[
+    let text = common::locus_ok(&[
         "tune",
         r1.to_str().unwrap(),
         "--held-out-log",

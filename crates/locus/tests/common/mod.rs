@@ -8,6 +8,23 @@ use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::Instant;
 
+/// Runs `locus` with `args`, asserts it succeeds (naming the arguments,
+/// with its standard output and error otherwise) and returns its standard
+/// output.
+pub fn locus_ok(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_locus"))
+        .args(args)
+        .output()
+        .expect("run locus");
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "locus {args:?} failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
+
 /// Runs `locus` with `args` and asserts it fails within `secs` seconds
 /// (killed there: a regression must not run for minutes, fill the disk or
 /// leave a serial line waiting), returning its standard error.
