@@ -45,6 +45,19 @@ pub struct BeamSensor {
 }
 
 impl BeamSensor {
+    /// The sensor's pose in the world (m, m, rad) on a robot at `pose`
+    /// (m, m, rad): its mount turned by the robot's heading.
+    #[must_use]
+    pub fn mounted(&self, pose: [f64; 3]) -> [f64; 3] {
+        let (s, c) = pose[2].sin_cos();
+        let m = self.mount;
+        [
+            pose[0] + c * m.x - s * m.y,
+            pose[1] + s * m.x + c * m.y,
+            pose[2] + m.yaw,
+        ]
+    }
+
     /// Angle of beam `k` from the sensor's x axis, rad (`angle_0 + k
     /// angle_step`; not wrapped; any `k`, even `>= count`).
     #[must_use]

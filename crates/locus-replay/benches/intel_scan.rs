@@ -49,17 +49,6 @@ fn log_path() -> PathBuf {
         .join("../../../shared/data/intel_lab/intel-corrected.log.gz")
 }
 
-/// The world pose of `sensor` on a robot at `pose` (m, m, rad).
-fn mounted(pose: [f64; 3], sensor: &BeamSensor) -> [f64; 3] {
-    let (s, c) = pose[2].sin_cos();
-    let m = sensor.mount;
-    [
-        pose[0] + c * m.x - s * m.y,
-        pose[1] + s * m.x + c * m.y,
-        pose[2] + m.yaw,
-    ]
-}
-
 /// The grid `locus map --carmen` makes from the corrected scans, through
 /// its ROS files (written to and read back from `dir`).
 fn intel_map(sensor: &BeamSensor, scans: &Scans, poses: &[[f64; 3]], dir: &Path) -> Map {
@@ -67,7 +56,7 @@ fn intel_map(sensor: &BeamSensor, scans: &Scans, poses: &[[f64; 3]], dir: &Path)
         scans
             .iter()
             .zip(poses)
-            .map(|(scan, &p)| (mounted(p, sensor), scan.ranges))
+            .map(|(scan, &p)| (sensor.mounted(p), scan.ranges))
     };
     let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     let mut add = |p: [f64; 2]| {

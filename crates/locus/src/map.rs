@@ -155,20 +155,9 @@ impl Input {
             .filter_map(|(scan, pose)| pose.map(|p| (scan, p)))
             .map(|(scan, p)| {
                 let sensor = self.sensor(scan.sensor)?;
-                Ok((sensor, mounted(p, sensor), scan.ranges))
+                Ok((sensor, sensor.mounted(p), scan.ranges))
             })
     }
-}
-
-/// The world pose of `sensor` on a robot at `pose` (m, m, rad).
-fn mounted(pose: [f64; 3], sensor: &BeamSensor) -> [f64; 3] {
-    let (s, c) = pose[2].sin_cos();
-    let m = sensor.mount;
-    [
-        pose[0] + c * m.x - s * m.y,
-        pose[1] + s * m.x + c * m.y,
-        pose[2] + m.yaw,
-    ]
 }
 
 /// The output directory's default name: `map-` and the file name without
