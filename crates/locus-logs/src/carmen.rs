@@ -457,6 +457,18 @@ mod tests {
         FLASER 2 2 3 1.7 2.1 0.5 1.7 2.1 0.5 3 pippo 3\n\
         ODOM 1.7 2.1 0.5 0 0 0 0 pippo 0\nODOM 9 9 9 0 0 0 4 pippo 4\n";
 
+    /// The odometry of `c` dead-reckons each scan-to-scan raw motion
+    /// exactly (to 1e-12).
+    fn assert_dead_reckons(c: &Carmen) {
+        let times = c.log.scans.times();
+        for (k, want) in c.raw_motion.iter().enumerate() {
+            let got = dead_reckon(&c.log.odometry, times[k], times[k + 1]);
+            for i in 0..3 {
+                assert!((got[i] - want[i]).abs() < 1e-12, "{k}: {got:?} {want:?}");
+            }
+        }
+    }
+
     #[test]
     fn scans_truth_and_odometry_that_dead_reckons_the_raw_motion() {
         let c = parse(LOG, p()).unwrap();
@@ -472,13 +484,7 @@ mod tests {
         assert_eq!(log.scans.times(), [0.9, 2.0, 3.0]);
         assert_eq!((c.retimed, c.largest_retime), (1, 0.09999999999999998));
         assert_eq!(c.raw_motion.len(), 2);
-        for (k, want) in c.raw_motion.iter().enumerate() {
-            let times = log.scans.times();
-            let got = dead_reckon(&log.odometry, times[k], times[k + 1]);
-            for i in 0..3 {
-                assert!((got[i] - want[i]).abs() < 1e-12, "{k}: {got:?} {want:?}");
-            }
-        }
+        assert_dead_reckons(&c);
         // Nothing after the last scan, nothing before the first.
         assert!(log.odometry.iter().all(|o| (0.9..=3.0).contains(&o.time)));
         assert_eq!(c.timeless_segments, 0);
@@ -515,12 +521,7 @@ mod tests {
                 "{o:?}"
             );
         }
-        for (k, want) in c.raw_motion.iter().enumerate() {
-            let got = dead_reckon(&c.log.odometry, times[k], times[k + 1]);
-            for i in 0..3 {
-                assert!((got[i] - want[i]).abs() < 1e-12, "{k}: {got:?} {want:?}");
-            }
-        }
+        assert_dead_reckons(&c);
     }
 
     #[test]
