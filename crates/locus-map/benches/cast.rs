@@ -1,7 +1,9 @@
 //! A 180-beam scan cast on a wall map of 100 random walls (20 m square) and
 //! on the same walls rasterised into a 420 x 420 grid at 0.05 m; beams span
 //! 360 degrees from 16 poses inside the map, with an 8 m range limit (the
-//! simulator's and Intel lab's lidar's) and without one. Beside the grid's
+//! simulator's and Intel lab's lidar's) and without one. An Intel-lab-sized
+//! grid too: 400 random walls on a 40 m square at 0.05 m (820 x 820 cells),
+//! with the Intel replay's 80 m range limit. Beside each grid's
 //! cast, the reference cast it replaced (`Grid::cast_reference`, the same
 //! hits), as its peer in the same run. Criterion reports
 //! the time per scan; divide by 180 for the time per beam (the throughput it
@@ -34,16 +36,16 @@ impl Rng {
     }
 }
 
-/// 96 random walls 0.5 to 4 m long plus the four sides of a 20 m square.
-fn walls(rng: &mut Rng) -> Vec<Segment> {
-    let s = 20.0;
+/// `n - 4` random walls 0.5 to 4 m long plus the four sides of an `s` m
+/// square.
+fn random_walls(rng: &mut Rng, n: usize, s: f64) -> Vec<Segment> {
     let mut out = vec![
         Segment::new([0.0, 0.0], [s, 0.0]),
         Segment::new([s, 0.0], [s, s]),
         Segment::new([s, s], [0.0, s]),
         Segment::new([0.0, s], [0.0, 0.0]),
     ];
-    while out.len() < 100 {
+    while out.len() < n {
         let a = [rng.range(0.5, s - 0.5), rng.range(0.5, s - 0.5)];
         let (l, th) = (rng.range(0.5, 4.0), rng.range(-PI, PI));
         let b = [a[0] + l * th.cos(), a[1] + l * th.sin()];
@@ -80,7 +82,7 @@ fn scan(
 
 fn bench(c: &mut Criterion) {
     let mut rng = Rng(29);
-    let walls = walls(&mut rng);
+    let walls = random_walls(&mut rng, 100, 20.0);
     let geometry = GridGeometry::covering([0.0, 0.0], [20.0, 20.0], 0.5, 0.05).unwrap();
     let segments = Map::from(SegmentMap::new(walls.clone()).unwrap());
     let grid = Grid::rasterise(&walls, geometry, Thresholds::default()).unwrap();
@@ -111,11 +113,39 @@ fn bench(c: &mut Criterion) {
         );
         scan(
             &mut group,
+            &format!("grid_420x420_cell_by_cell/{limit_name}"),
+            &poses,
+            |o, a| grid.cast_cell_by_cell(o, a, limit),
+        );
+        scan(
+            &mut group,
             &format!("grid_420x420_reference/{limit_name}"),
             &poses,
             |o, a| grid.cast_reference(o, a, limit),
         );
     }
+    let big_walls = random_walls(&mut rng, 400, 40.0);
+    let big_geometry = GridGeometry::covering([0.0, 0.0], [40.0, 40.0], 0.5, 0.05).unwrap();
+    let big = Grid::rasterise(&big_walls, big_geometry, Thresholds::default()).unwrap();
+    let big_map = Map::from(big.clone());
+    let big_poses: Vec<[f64; 3]> = (0..16)
+        .map(|_| {
+            [
+                rng.range(1.0, 39.0),
+                rng.range(1.0, 39.0),
+                rng.range(-PI, PI),
+            ]
+        })
+        .collect();
+    scan(&mut group, "grid_820x820/80m", &big_poses, |o, a| {
+        big_map.cast(o, a, 80.0)
+    });
+    scan(&mut group, "grid_820x820_cell_by_cell/80m", &big_poses, |o, a| {
+        big.cast_cell_by_cell(o, a, 80.0)
+    });
+    scan(&mut group, "grid_820x820_reference/80m", &big_poses, |o, a| {
+        big.cast_reference(o, a, 80.0)
+    });
     group.finish();
 }
 

@@ -20,6 +20,7 @@
 mod bits;
 mod builder;
 mod cast;
+mod clearance;
 mod error;
 mod geometry;
 mod grid;
