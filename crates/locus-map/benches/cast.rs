@@ -113,12 +113,6 @@ fn bench(c: &mut Criterion) {
         );
         scan(
             &mut group,
-            &format!("grid_420x420_cell_by_cell/{limit_name}"),
-            &poses,
-            |o, a| grid.cast_cell_by_cell(o, a, limit),
-        );
-        scan(
-            &mut group,
             &format!("grid_420x420_reference/{limit_name}"),
             &poses,
             |o, a| grid.cast_reference(o, a, limit),
@@ -139,9 +133,6 @@ fn bench(c: &mut Criterion) {
         .collect();
     scan(&mut group, "grid_820x820/80m", &big_poses, |o, a| {
         big_map.cast(o, a, 80.0)
-    });
-    scan(&mut group, "grid_820x820_cell_by_cell/80m", &big_poses, |o, a| {
-        big.cast_cell_by_cell(o, a, 80.0)
     });
     scan(&mut group, "grid_820x820_reference/80m", &big_poses, |o, a| {
         big.cast_reference(o, a, 80.0)

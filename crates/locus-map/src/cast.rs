@@ -1,13 +1,11 @@
 //! The ray cast on an occupancy grid: the exact cell traversal (Amanatides
-//! and Woo) to the first occupied cell, jumping over cells the grid's
-//! clearance says are free (`clearance.rs`, `traverse/jump.rs`) and reading
-//! the others a bit a cell (`bits.rs`), and the normal fitted there
-//! (`normal.rs`).
+//! and Woo) to the first occupied cell, read a bit a cell (`bits.rs`,
+//! `Traversal::first`), and the normal fitted there (`normal.rs`).
 
 use crate::grid::Grid;
 use crate::hit::{Hit, HitSource, direction, facing, valid_ray};
 use crate::normal;
-use crate::traverse::{Traversal, Visit};
+use crate::traverse::Traversal;
 
 impl Grid {
     /// The first occupied cell the ray from `origin` (m) at `angle` (rad,
@@ -22,30 +20,6 @@ impl Grid {
     /// enters it, returns `None`, as do a non-finite origin or angle and a NaN
     /// or negative `max_range`. Allocates nothing.
     pub fn cast(&self, origin: [f64; 2], angle: f64, max_range: f64) -> Option<Hit> {
-        self.cast_by(origin, angle, max_range, |t| {
-            t.first_clear(self.occupied_bits(), self.clearance())
-        })
-    }
-
-    /// [`Grid::cast`] stepping through every cell, without the jumps over
-    /// empty space: the same results, slower; the fast cast's peer in the
-    /// benchmark (`benches/cast.rs`).
-    #[doc(hidden)]
-    pub fn cast_cell_by_cell(&self, origin: [f64; 2], angle: f64, max_range: f64) -> Option<Hit> {
-        let bits = self.occupied_bits();
-        self.cast_by(origin, angle, max_range, |t| t.first(|k| bits.get(k)))
-    }
-
-    /// The cast, with `first` finding the first occupied cell on a
-    /// traversal.
-    #[inline]
-    fn cast_by(
-        &self,
-        origin: [f64; 2],
-        angle: f64,
-        max_range: f64,
-        first: impl FnOnce(Traversal) -> Option<Visit>,
-    ) -> Option<Hit> {
         if !valid_ray(origin, angle, max_range) {
             return None;
         }
@@ -55,8 +29,9 @@ impl Grid {
         let p = g.to_cells(origin);
         let res = g.resolution();
         let v = [dg[0] / res, dg[1] / res];
-        let cell = first(Traversal::new(p, v, max_range, g.width(), g.height()))?;
-        let ng = normal::estimate(self.occupied_bits(), cell.ix, cell.iy, cell.face, dg);
+        let bits = self.occupied_bits();
+        let cell = Traversal::new(p, v, max_range, g.width(), g.height()).first(|k| bits.get(k))?;
+        let ng = normal::estimate(bits, cell.ix, cell.iy, cell.face, dg);
         let (normal, incidence) = facing(g.rotate_out(ng), d);
         let t = cell.t_enter;
         Some(Hit {

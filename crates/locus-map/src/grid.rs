@@ -3,7 +3,6 @@
 
 use crate::MapError;
 use crate::bits::OccupiedBits;
-use crate::clearance::Clearance;
 use crate::geometry::GridGeometry;
 use crate::segments::Segment;
 use crate::traverse::Traversal;
@@ -91,9 +90,6 @@ pub struct Grid {
     state: Vec<Occupancy>,
     /// Whether each cell is occupied (the states, as the cast reads them).
     occupied: OccupiedBits,
-    /// How far each cell is from the nearest occupied one (what the cast
-    /// jumps by, `clearance.rs`): a byte a cell.
-    clearance: Clearance,
 }
 
 impl PartialEq for Grid {
@@ -118,14 +114,12 @@ impl Grid {
     /// [`MapError::Invalid`] if the thresholds are invalid.
     pub fn new(geometry: GridGeometry, thresholds: Thresholds) -> Result<Self, MapError> {
         thresholds.check()?;
-        let occupied = OccupiedBits::new(geometry.width(), geometry.height());
         Ok(Self {
             geometry,
             thresholds,
             probability: vec![f32::NAN; geometry.len()],
             state: vec![Occupancy::Unknown; geometry.len()],
-            clearance: Clearance::of(&occupied, geometry.width(), geometry.height()),
-            occupied,
+            occupied: OccupiedBits::new(geometry.width(), geometry.height()),
         })
     }
 
@@ -155,7 +149,6 @@ impl Grid {
         for (k, p) in probabilities.iter().enumerate() {
             grid.set_index(k, *p)?;
         }
-        grid.refresh_clearance();
         Ok(grid)
     }
 
@@ -185,7 +178,6 @@ impl Grid {
                 grid.set_index(geometry.index(c.ix, c.iy), Some(1.0))?;
             }
         }
-        grid.refresh_clearance();
         Ok(grid)
     }
 
@@ -232,11 +224,7 @@ impl Grid {
                 ),
             ));
         }
-        self.set_index(self.geometry.index(ix, iy), p)?;
-        if self.occupied(ix, iy) {
-            self.clearance.occupy(ix, iy);
-        }
-        Ok(())
+        self.set_index(self.geometry.index(ix, iy), p)
     }
 
     /// The number of cells in each state: `(occupied, free, unknown)`.
@@ -260,26 +248,11 @@ impl Grid {
         &self.occupied
     }
 
-    /// How far each cell is from the nearest occupied one.
-    #[inline]
-    pub(crate) fn clearance(&self) -> &Clearance {
-        &self.clearance
-    }
-
     fn inside(&self, ix: usize, iy: usize) -> bool {
         ix < self.geometry.width() && iy < self.geometry.height()
     }
 
-    /// The clearance of the occupied cells as they are, built afresh.
-    fn refresh_clearance(&mut self) {
-        let g = self.geometry;
-        self.clearance = Clearance::of(&self.occupied, g.width(), g.height());
-    }
-
-    /// Sets cell `k`'s probability and state, not its clearance: a cell
-    /// becoming occupied leaves the clearance wrong until
-    /// [`Clearance::occupy`] or a refresh.
-    fn set_index(&mut self, k: usize, p: Option<f64>) -> Result<(), MapError> {
+    pub(crate) fn set_index(&mut self, k: usize, p: Option<f64>) -> Result<(), MapError> {
         if let Some(p) = p {
             if !(0.0..=1.0).contains(&p) {
                 return Err(MapError::invalid(

@@ -20,7 +20,6 @@
 mod bits;
 mod builder;
 mod cast;
-mod clearance;
 mod error;
 mod geometry;
 mod grid;

@@ -9,8 +9,6 @@
 //! (metres): the point at `t` is `p + t v`, with `v` the direction in cells
 //! per metre.
 
-mod jump;
-
 /// One cell on the ray.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Visit {
