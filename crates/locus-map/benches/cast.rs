@@ -134,9 +134,12 @@ fn bench(c: &mut Criterion) {
     scan(&mut group, "grid_820x820/80m", &big_poses, |o, a| {
         big_map.cast(o, a, 80.0)
     });
-    scan(&mut group, "grid_820x820_reference/80m", &big_poses, |o, a| {
-        big.cast_reference(o, a, 80.0)
-    });
+    scan(
+        &mut group,
+        "grid_820x820_reference/80m",
+        &big_poses,
+        |o, a| big.cast_reference(o, a, 80.0),
+    );
     group.finish();
 }
 

@@ -173,7 +173,10 @@ fn cells_set_later() {
     let mut hits = 0;
     for round in 0..60 {
         for _ in 0..10 {
-            let (x, y) = ((rng.next_u64() % 120) as usize, (rng.next_u64() % 100) as usize);
+            let (x, y) = (
+                (rng.next_u64() % 120) as usize,
+                (rng.next_u64() % 100) as usize,
+            );
             let p = if round % 3 == 2 { 0.0 } else { 1.0 };
             grid.set(x, y, Some(p)).unwrap();
         }
