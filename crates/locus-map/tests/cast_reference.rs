@@ -21,15 +21,7 @@ fn agree(grid: &Grid, rng: &mut Rng, rays: usize, lo: f64, hi: f64) -> usize {
         } else {
             rng.range(-PI, PI)
         };
-        for limit in [0.0, 0.3, 8.0, f64::INFINITY] {
-            let fast = grid.cast(origin, angle, limit);
-            let slow = grid.cast_reference(origin, angle, limit);
-            assert_eq!(
-                fast, slow,
-                "origin {origin:?}, angle {angle}, limit {limit}"
-            );
-            hits += usize::from(fast.is_some());
-        }
+        hits += agree_all(grid, origin, angle, &[0.0, 0.3, 8.0, f64::INFINITY]);
     }
     hits
 }

@@ -421,6 +421,7 @@ impl<'a> Engine<'a> {
                 b.down_weighted += o.down_weighted;
                 b.gated += o.gated;
                 b.unusable += o.unusable;
+                b.aligned += o.aligned;
                 b.nis += o.nis;
                 EventKind::Scan {
                     index: scan.index,

@@ -188,6 +188,26 @@ fn scan_correct(
     let out = &mut entry.scan;
     out.beams = u32::try_from(count).unwrap_or(u32::MAX);
     out.chosen = u32::try_from(count.min(beams.per_scan as usize)).unwrap_or(u32::MAX);
+    // The scan aligned to the map (`scan_align.rs`): a beam is cast from
+    // the aligned pose where the running estimate would send it elsewhere
+    // (more than a beam's noise away), else from the running estimate.
+    let aligned = crate::scan_align::align(
+        &crate::scan_align::ScanBeams {
+            map,
+            sensor,
+            ranges: scan.ranges,
+            per_scan: beams.per_scan,
+        },
+        &track.belief.x,
+        &track.belief.p,
+        &beams,
+        cfg.robust_dof,
+    )
+    .map(|a| {
+        let mut from = track.belief.x;
+        from.fixed_rows_mut::<3>(0).copy_from(&a.pose);
+        from
+    });
     let mut nll = 0.0;
     for k in chosen_beams(count, beams.per_scan) {
         let z = match Reading::of(scan.ranges[k]) {
@@ -198,7 +218,14 @@ fn scan_correct(
             }
         };
         let x = &track.belief.x;
-        let Some(model) = beam_model(map, sensor, k, x, &beams) else {
+        let from = match &aligned {
+            Some(a) if crate::scan_align::apart(x, a, z) > beams.sigma => {
+                out.aligned = 1;
+                a
+            }
+            _ => x,
+        };
+        let Some(model) = beam_model(map, sensor, k, from, &beams) else {
             out.no_surface += 1;
             continue;
         };

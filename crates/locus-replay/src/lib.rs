@@ -88,6 +88,7 @@ pub mod rail;
 pub mod refusals;
 mod report;
 pub mod results;
+mod scan_align;
 mod segments;
 mod smoother;
 mod start;

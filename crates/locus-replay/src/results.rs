@@ -113,6 +113,9 @@ pub struct BeamsSection {
     pub short: u32,
     /// Chosen beams the filter could not use.
     pub unusable: u32,
+    /// Scans with beams cast from the pose the scan aligns to in the map
+    /// (the running estimate too far off).
+    pub aligned_scans: u32,
 }
 
 impl Section {
@@ -164,6 +167,7 @@ impl Section {
                         no_surface: b.no_surface,
                         short: b.short,
                         unusable: b.unusable,
+                        aligned_scans: b.aligned,
                     }
                 }),
             },

@@ -288,6 +288,12 @@ pub struct Flags {
     /// heading (rad), comma-separated. Default 0.05,0.05,0.05.
     #[arg(long, value_name = "SX,SY,STHETA", value_parser = three_positive)]
     pub initial_std: Option<[f64; 3]>,
+    /// Where the robot starts: x (m), y (m) and heading (rad) in the map's
+    /// frame, comma-separated, at the first odometry time. Replaces the
+    /// log's start pose and the truth's; give --initial-std with it to say
+    /// how far off it may be.
+    #[arg(long, value_name = "X,Y,THETA", value_parser = three_finite, allow_hyphen_values = true)]
+    pub start: Option<[f64; 3]>,
     /// Student-t degrees of freedom of the sightings' noise: sightings far
     /// from the prediction are down-weighted rather than only gated.
     #[arg(long, default_value_t = 4.0, value_parser = super::positive_f64)]
@@ -419,9 +425,19 @@ impl Flags {
 
 /// Three numbers, each finite and > 0, separated by commas (`0.01,0.01,0.02`).
 fn three_positive(text: &str) -> Result<[f64; 3], String> {
+    three(text, super::positive_f64)
+}
+
+/// Three finite numbers separated by commas (`1.5,-2,0.3`).
+fn three_finite(text: &str) -> Result<[f64; 3], String> {
+    three(text, super::finite_f64)
+}
+
+/// Three numbers, each read by `parse`, separated by commas.
+fn three(text: &str, parse: fn(&str) -> Result<f64, String>) -> Result<[f64; 3], String> {
     let values = text
         .split(',')
-        .map(|t| super::positive_f64(t.trim()))
+        .map(|t| parse(t.trim()))
         .collect::<Result<Vec<f64>, String>>()?;
     <[f64; 3]>::try_from(values.as_slice()).map_err(|_| {
         format!(

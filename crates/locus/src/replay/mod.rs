@@ -45,6 +45,15 @@ pub struct Args {
 /// file that cannot be written.
 pub fn run(args: &Args) -> Result<()> {
     let mut loaded = args.source.read()?;
+    if let Some([x, y, theta]) = loaded.flags.start {
+        let t0 = loaded.log.odometry.first().map_or(0.0, |o| o.time);
+        loaded.log.start = Some(locus_logs::mrclam::TruthPose {
+            time: t0,
+            x,
+            y,
+            theta,
+        });
+    }
     let clock = locus_replay::truth_clock::settle(
         &mut loaded.log,
         &loaded.flags.config(),
@@ -275,6 +284,10 @@ fn counts(r: &Report, section: &Section) -> Table {
                 "{} / {} / {} / {}",
                 b.no_return, b.no_surface, b.short, b.unusable
             ),
+        ]);
+        t.add_row(vec![
+            "scans with beams cast from their alignment to the map [count]".to_string(),
+            b.aligned.to_string(),
         ]);
     }
     t
