@@ -40,6 +40,20 @@ pub fn progress_bar(len: u64, what: &str) -> Result<ProgressBar> {
     Ok(ProgressBar::new(len).with_style(style))
 }
 
+/// A spinner for work of unknown length: `what` (an `indicatif`
+/// template such as `estimating the noise, {elapsed} elapsed`), redrawn
+/// ten times a second until it is finished.
+///
+/// # Errors
+/// An invalid template.
+pub fn spinner(what: &str) -> Result<ProgressBar> {
+    let style =
+        ProgressStyle::with_template(&format!("{{spinner}} {what}")).context("spinner template")?;
+    let bar = ProgressBar::new_spinner().with_style(style);
+    bar.enable_steady_tick(core::time::Duration::from_millis(100));
+    Ok(bar)
+}
+
 /// Whether `err` (or one of its causes) is a broken pipe: the reader of
 /// standard output has gone, which is not a failure of the command.
 pub fn is_broken_pipe(err: &anyhow::Error) -> bool {

@@ -64,8 +64,15 @@ pub fn run(args: &Args) -> Result<()> {
         fs::write(path, locus_logs::locus_csv::write(&log.to_locus()))
             .with_context(|| format!("writing {}", path.display()))?;
     }
+    // The noise search replays the log hundreds of times: minutes on a
+    // long log of scans.
+    let searching = crate::output::spinner(
+        "settling the noise and the odometry delay from the log, {elapsed} elapsed",
+    )?;
     let settled = settle(log, &flags.config(), &flags.overrides())
-        .with_context(|| format!("settling the noise of {}", log.name))?;
+        .with_context(|| format!("settling the noise of {}", log.name));
+    searching.finish_and_clear();
+    let settled = settled?;
     let slug: String = log
         .name
         .chars()
