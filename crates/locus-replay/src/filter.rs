@@ -225,20 +225,17 @@ fn scan_correct(
             }
             _ => x,
         };
-        let Some(model) = beam_model(map, sensor, k, from, &beams) else {
-            out.no_surface += 1;
-            continue;
+        let model = match beam(map, sensor, k, z, from, x, &track.belief.p, &beams) {
+            Beam::NoSurface => {
+                out.no_surface += 1;
+                continue;
+            }
+            Beam::Short { .. } => {
+                out.short += 1;
+                continue;
+            }
+            Beam::Usable { model, .. } => model,
         };
-        let mut h = SMatrix::<f64, 1, STATE>::zeros();
-        let Some(predicted) = model.evaluate(x, Some(&mut h)) else {
-            out.no_surface += 1;
-            continue;
-        };
-        let s = (h * track.belief.p * h.transpose())[(0, 0)] + model.var_range;
-        if z - predicted[0] < -beams.short_sigma * s.sqrt() {
-            out.short += 1;
-            continue;
-        }
         let zv = SVector::<f64, 1>::new(z);
         let update = match robust {
             Some(t) => track.correct_robust(&rules, &t, &model, &zv),
@@ -279,6 +276,56 @@ fn scan_correct(
 pub(crate) fn chosen_beams(count: usize, per_scan: u32) -> impl Iterator<Item = usize> {
     let chosen = count.min(per_scan as usize);
     (0..chosen).map(move |j| (2 * j + 1) * count / (2 * chosen))
+}
+
+/// What one beam reading gives (`beam`).
+pub(crate) enum Beam {
+    /// Its cast meets no surface within range, or meets it grazing or
+    /// from behind.
+    NoSurface,
+    /// It reads shorter than the surface by more than
+    /// [`Beams::short_sigma`](crate::Beams::short_sigma) standard
+    /// deviations of its innovation (variance `s`, m^2): something not in
+    /// the map.
+    Short { s: f64 },
+    /// It can correct: the model, its residual (reading minus predicted,
+    /// m) and its Jacobian.
+    Usable {
+        model: PlanarBeam<f64>,
+        residual: f64,
+        h: SMatrix<f64, 1, STATE>,
+    },
+}
+
+/// Beam `k` of `sensor`, reading `z` (m), cast in `map` from the state
+/// `from` and evaluated at the state `x` of covariance `p`: the surface
+/// it meets ([`beam_model`]), the range predicted there and whether the
+/// reading is far too short for it. The beam loop (`scan_correct`) and
+/// the scan's alignment (`scan_align.rs`) judge a beam alike through it.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn beam(
+    map: &locus_map::Map,
+    sensor: &locus_logs::BeamSensor,
+    k: usize,
+    z: f64,
+    from: &StateVector,
+    x: &StateVector,
+    p: &StateMatrix,
+    beams: &crate::Beams,
+) -> Beam {
+    let Some(model) = beam_model(map, sensor, k, from, beams) else {
+        return Beam::NoSurface;
+    };
+    let mut h = SMatrix::<f64, 1, STATE>::zeros();
+    let Some(predicted) = model.evaluate(x, Some(&mut h)) else {
+        return Beam::NoSurface;
+    };
+    let s = (h * p * h.transpose())[(0, 0)] + model.var_range;
+    let residual = z - predicted[0];
+    if residual < -beams.short_sigma * s.sqrt() {
+        return Beam::Short { s };
+    }
+    Beam::Usable { model, residual, h }
 }
 
 /// Beam `k` of `sensor` at the state `x`: cast in `map` from the sensor,

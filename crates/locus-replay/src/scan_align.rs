@@ -51,8 +51,7 @@ use locus_map::Map;
 use locus_models::calibrated_unicycle::RANGE_BIAS;
 
 use crate::Beams;
-use crate::filter::{StateMatrix, StateVector, beam_model, chosen_beams};
-use locus_core::MeasurementModel;
+use crate::filter::{Beam, StateMatrix, StateVector, beam, chosen_beams};
 
 /// The states the alignment moves: the pose and the beams' range bias,
 /// which every beam reads (a range error the scan's beams share is the
@@ -238,22 +237,30 @@ impl Problem<'_> {
             let Reading::Range(z) = Reading::of(self.scan.ranges[k]) else {
                 continue;
             };
-            let mut h = SMatrix::<f64, 1, { crate::STATE }>::zeros();
-            let Some(predicted) = beam_model(self.scan.map, self.scan.sensor, k, &at, beams)
-                .and_then(|model| model.evaluate(&at, Some(&mut h)))
-            else {
+            let scan = self.scan;
+            let (r, h) = match beam(
+                scan.map,
+                scan.sensor,
+                k,
+                f64::from(z),
+                &at,
+                &at,
+                self.p,
+                beams,
+            ) {
                 // A beam with a return that meets no surface costs what a
                 // residual at the short-reading threshold costs, so that a
                 // pose cannot lower its cost by casting beams into nothing.
-                cost += rho(short2 * var);
-                continue;
+                Beam::NoSurface => {
+                    cost += rho(short2 * var);
+                    continue;
+                }
+                Beam::Short { s } => {
+                    cost += rho(short2 * s);
+                    continue;
+                }
+                Beam::Usable { residual, h, .. } => (residual, h),
             };
-            let r = f64::from(z) - predicted[0];
-            let s = (h * self.p * h.transpose())[(0, 0)] + var;
-            if r < -beams.short_sigma * s.sqrt() {
-                cost += rho(short2 * s);
-                continue;
-            }
             let w = (nu + 1.0) / (nu + r * r / var);
             let j = Q::from_fn(|i, _| h[(0, ALIGNED[i])]);
             a += j * j.transpose() * (w / var);
