@@ -26,6 +26,7 @@ use crate::event::{Entry, Event, ScanRef};
 use crate::filter::{
     Carried, Filter, HISTORY, State, StateMatrix, StateVector, apply, calibration_of, pose_belief,
 };
+use crate::instants::InstantTally;
 use crate::refusals::refusals_before;
 use crate::start::{initial_pose, start_disagreement};
 use crate::{
@@ -39,7 +40,8 @@ pub(crate) struct Engine<'a> {
     t0: f64,
     pub(crate) filter: Box<Filter>,
     pub(crate) next_index: usize,
-    pub(crate) tally: Tally,
+    /// The filter's accuracy, one instant at a time.
+    pub(crate) tally: InstantTally,
     pub(crate) report: Report,
     /// The steps made final and not yet taken by the caller.
     pub(crate) held: Vec<Step>,
@@ -172,7 +174,7 @@ impl<'a> Engine<'a> {
             t0,
             filter: Box::new(Filter::new(rules, start)),
             next_index: 0,
-            tally,
+            tally: InstantTally::new(tally),
             report: Report {
                 summary: Tally::new(3)
                     .map_err(|_| Error::InvalidConfig("NEES degrees of freedom"))?
@@ -457,7 +459,7 @@ impl<'a> Engine<'a> {
             self.report.compared += 1;
             self.compared_after_start += usize::from(time > self.t0);
         }
-        step.tally_into(&mut self.tally, Some(&step.belief));
+        self.tally.add(&step, Some(&step.belief));
         self.held.push(step);
         if self.cfg.smooth {
             self.nodes.push(smoother::Node {

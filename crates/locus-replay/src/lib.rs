@@ -81,6 +81,7 @@ mod event;
 mod filter;
 pub mod fleet;
 pub mod initial;
+mod instants;
 pub mod log;
 pub mod noise;
 pub mod policy;

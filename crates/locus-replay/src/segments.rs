@@ -102,7 +102,7 @@ pub fn replay_in_segments(
     let last = engine.filter.base().belief;
     engine.report.final_belief = pose_belief(&last);
     engine.report.calibration = calibration_of(&last);
-    engine.report.summary = judged(engine.tally.summary(0), engine.compared_after_start > 0);
+    engine.report.summary = judged(engine.tally.summary(), engine.compared_after_start > 0);
     if cfg.smooth {
         smoother::flush(&mut engine, checkpoints, &mut sink)?;
     }

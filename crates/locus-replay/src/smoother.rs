@@ -24,6 +24,7 @@ use locus_eval::Tally;
 
 use crate::engine::{Checkpoint, Engine, judged};
 use crate::filter::{calibration_of, pose_belief};
+use crate::instants::InstantTally;
 use crate::{Error, STATE, StateMatrix, StateVector, Step};
 
 /// What the backward pass needs of one event of the forward pass: the
@@ -188,7 +189,7 @@ pub(crate) fn flush<'a>(
     let mut held = report.smoothing_held;
     let mut remake = |engine: &mut Engine<'a>, j: usize| -> Result<(), Error> {
         engine.restore(&checkpoints[j])?;
-        engine.tally = fresh.clone();
+        engine.tally = InstantTally::new(fresh.clone());
         let end = checkpoints.get(j + 1).map(|c| c.next_index);
         while end.is_none_or(|end| engine.next_index < end) && engine.advance()? {}
         // The pass is deterministic: a re-run stops where the next
@@ -213,7 +214,7 @@ pub(crate) fn flush<'a>(
             bounds[j] = engine.nodes.first().copied().zip(first);
         }
     }
-    let mut tally = fresh.clone();
+    let mut tally = InstantTally::new(fresh.clone());
     let mut first_calibration = None;
     for j in 0..checkpoints.len() {
         if remade {
@@ -230,12 +231,12 @@ pub(crate) fn flush<'a>(
         })
         .map_err(|time| Error::Smoother { time })?;
         for step in &engine.held {
-            step.tally_into(&mut tally, step.smoothed.as_ref());
+            tally.add(step, step.smoothed.as_ref());
             sink(step);
         }
     }
     engine.report = report;
-    engine.report.smoothed = Some(judged(tally.summary(0), engine.compared_after_start > 0));
+    engine.report.smoothed = Some(judged(tally.summary(), engine.compared_after_start > 0));
     engine.report.smoothed_calibration = first_calibration;
     engine.report.smoothing_held = held;
     engine.report.smoothing_checkpoints = checkpoints.len() - 1;

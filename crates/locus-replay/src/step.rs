@@ -353,23 +353,6 @@ impl Step {
         }
     }
 
-    /// Adds the step to `tally`: its [`Step::sample_of`] `belief` if there
-    /// is one and the truth covers the step, else only its time and
-    /// [`Step::measurement`].
-    pub fn tally_into(&self, tally: &mut locus_eval::Tally, belief: Option<&Belief<f64, 3>>) {
-        match belief.and_then(|b| self.sample_of(b)) {
-            Some(sample) => tally.push(&sample),
-            None => {
-                let (measured, correction) = self.measurement();
-                tally.count(
-                    self.elapsed,
-                    measured,
-                    correction.map(|(_, _, applied)| applied),
-                );
-            }
-        }
-    }
-
     /// The figures `locus run` summarises and draws, if the step has a
     /// ground truth to compare with (NEES against it, 3 dof).
     #[must_use]

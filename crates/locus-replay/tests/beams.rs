@@ -338,12 +338,12 @@ fn the_truth_clock_is_measured_from_the_sensors() {
 /// no flags (issue 29): its truth is found about 70 ms late against the
 /// laser and compared there; the range error that persists for seconds is
 /// found as the range bias; the filter and the smoother are then each
-/// inside their 3 sigma at least 90 % of the time, the smoother no worse
-/// than the range alone, the filter within 1 % of it. (Measured: filter
-/// 6.66 mm, smoother 6.40 mm, the range alone 6.60 mm. A causal filter
-/// cannot do better than follow the range here: the range error persists
-/// for about 4 s, over which the odometry's own walk grows to about a
-/// centimetre.)
+/// inside their 3 sigma at least 90 % of the time, and no worse than the
+/// range alone, judged at the same instants (the estimate after each
+/// scan; `instants.rs`). (Measured: filter 6.54 mm, smoother 6.40 mm, the
+/// range alone 6.60 mm. A causal filter cannot do much better than follow
+/// the range here: the range error persists for about 4 s, over which the
+/// odometry's own walk grows to about a centimetre.)
 #[test]
 fn laser_wall_replayed_with_no_flags_is_honest() {
     let path = std::path::Path::new(concat!(
@@ -395,7 +395,7 @@ fn laser_wall_replayed_with_no_flags_is_honest() {
     );
     assert!(!settled.range_bias.expect("scans").held);
     for (name, s, bound) in [
-        ("filter", r.summary, 1.01 * range.rmse),
+        ("filter", r.summary, range.rmse),
         ("smoother", smoothed, range.rmse),
     ] {
         assert!(s.position_rmse <= bound, "{name}: {s:?} against {range:?}");

@@ -113,7 +113,8 @@ pub fn honesty(results: &Results) -> Table {
         .join(" / ");
         t.add_row(vec![
             name.to_string(),
-            fig(v(a.position_rmse_m), 1.0, 3),
+            // Four decimals: a millimetre matters on a rail or in a room.
+            fig(v(a.position_rmse_m), 1.0, 4),
             fig(v(a.heading_rmse_rad), 1.0, 3),
             fig(v(a.heading_rmse_about_offset_rad), 1.0, 3),
             fig(v(a.heading_offset_rad), 1.0, 3),

@@ -195,7 +195,7 @@ fn execute(
         let [range, kf] = locus_replay::rail::baselines(log, wall, r_var, v_var, cfg.truth_max_gap);
         for (name, b) in [("range alone", range), ("linear KF, published noise", kf)] {
             let share = format!("{} (x)", fig(b.within_3_sigma, 100.0, 1));
-            honesty.add_row([name, &fig(b.rmse, 1.0, 3), "n/a", "n/a", "n/a", &share]);
+            honesty.add_row([name, &fig(b.rmse, 1.0, 4), "n/a", "n/a", "n/a", &share]);
         }
     }
     text.push_str(&format!("{honesty}\n"));
