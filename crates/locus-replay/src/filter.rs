@@ -29,6 +29,7 @@ use locus_models::range_bearing::RangeBearing;
 use locus_models::unicycle::{Unicycle, Velocities};
 
 use crate::event::{Entry, Event};
+use crate::linearised_at::LinearisedAt;
 use crate::{Config, Log, ScanOutcome, SightingOutcome, Unusable};
 
 /// Cap on one sighting's NIS in
@@ -188,9 +189,10 @@ fn scan_correct(
     let out = &mut entry.scan;
     out.beams = u32::try_from(count).unwrap_or(u32::MAX);
     out.chosen = u32::try_from(count.min(beams.per_scan as usize)).unwrap_or(u32::MAX);
-    // The scan aligned to the map (`scan_align.rs`): a beam is cast from
-    // the aligned pose where the running estimate would send it elsewhere
-    // (more than a beam's noise away), else from the running estimate.
+    // The scan aligned to the map (`scan_align.rs`): its beams are then
+    // cast from the aligned state and linearised there (the iterated EKF,
+    // `linearised_at.rs`); a scan that cannot be aligned is cast and
+    // linearised at the running estimate, beam after beam.
     let aligned = crate::scan_align::align(
         &crate::scan_align::ScanBeams {
             map,
@@ -217,29 +219,41 @@ fn scan_correct(
                 continue;
             }
         };
-        let x = &track.belief.x;
-        let from = match &aligned {
-            Some(a) if crate::scan_align::apart(x, a, z) > beams.sigma => {
-                out.aligned = 1;
-                a
-            }
-            _ => x,
-        };
-        let model = match beam(map, sensor, k, z, from, x, &track.belief.p, &beams) {
-            Beam::NoSurface => {
-                out.no_surface += 1;
-                continue;
-            }
-            Beam::Short { .. } => {
-                out.short += 1;
-                continue;
-            }
-            Beam::Usable { model, .. } => model,
-        };
         let zv = SVector::<f64, 1>::new(z);
-        let update = match robust {
-            Some(t) => track.correct_robust(&rules, &t, &model, &zv),
-            None => track.correct(&rules, &model, &zv),
+        let update = match &aligned {
+            Some(a) => {
+                out.aligned = 1;
+                let Some(model) = linearised_beam(map, sensor, k, a, &beams) else {
+                    out.no_surface += 1;
+                    continue;
+                };
+                if is_short(z, &model, &track.belief, &beams) {
+                    out.short += 1;
+                    continue;
+                }
+                match robust {
+                    Some(t) => track.correct_robust(&rules, &t, &model, &zv),
+                    None => track.correct(&rules, &model, &zv),
+                }
+            }
+            None => {
+                let x = &track.belief.x;
+                let model = match beam(map, sensor, k, z, x, x, &track.belief.p, &beams) {
+                    Beam::NoSurface => {
+                        out.no_surface += 1;
+                        continue;
+                    }
+                    Beam::Short { .. } => {
+                        out.short += 1;
+                        continue;
+                    }
+                    Beam::Usable { model, .. } => model,
+                };
+                match robust {
+                    Some(t) => track.correct_robust(&rules, &t, &model, &zv),
+                    None => track.correct(&rules, &model, &zv),
+                }
+            }
         };
         let update = match update {
             Ok(u) => u,
@@ -326,6 +340,42 @@ pub(crate) fn beam(
         return Beam::Short { s };
     }
     Beam::Usable { model, residual, h }
+}
+
+/// Beam `k` of `sensor` cast from the state `a` and linearised there
+/// ([`LinearisedAt`]); `None` where it meets no surface.
+fn linearised_beam(
+    map: &locus_map::Map,
+    sensor: &locus_logs::BeamSensor,
+    k: usize,
+    a: &StateVector,
+    beams: &crate::Beams,
+) -> Option<LinearisedAt> {
+    let planar = beam_model(map, sensor, k, a, beams)?;
+    let mut h = SMatrix::<f64, 1, STATE>::zeros();
+    let h0 = planar.evaluate(a, Some(&mut h))?;
+    Some(LinearisedAt {
+        h0: h0[0],
+        h,
+        at: *a,
+        var: planar.var_range,
+    })
+}
+
+/// Whether reading `z` is shorter than `model` predicts at `belief` by
+/// more than [`Beams::short_sigma`](crate::Beams::short_sigma) standard
+/// deviations of its innovation (something not in the map).
+fn is_short(
+    z: f64,
+    model: &LinearisedAt,
+    belief: &Belief<f64, STATE>,
+    beams: &crate::Beams,
+) -> bool {
+    let Some(predicted) = model.h(&belief.x) else {
+        return false;
+    };
+    let s = (model.h * belief.p * model.h.transpose())[(0, 0)] + model.var;
+    z - predicted[0] < -beams.short_sigma * s.sqrt()
 }
 
 /// Beam `k` of `sensor` at the state `x`: cast in `map` from the sensor,

@@ -113,8 +113,7 @@ pub struct BeamsSection {
     pub short: u32,
     /// Chosen beams the filter could not use.
     pub unusable: u32,
-    /// Scans with beams cast from the pose the scan aligns to in the map
-    /// (the running estimate too far off).
+    /// Scans aligned to the map and corrected there (the iterated EKF).
     pub aligned_scans: u32,
 }
 

@@ -101,8 +101,8 @@ pub struct ScanOutcome {
     pub gated: u32,
     /// Beams the filter could not use (refused, the belief unchanged).
     pub unusable: u32,
-    /// Scans with beams cast from the pose the scan aligns to in the map
-    /// (`scan_align.rs`), the running estimate being too far off: 1 for
+    /// Scans aligned to the map (`scan_align.rs`) and corrected there,
+    /// their beams cast from the aligned pose and linearised at it: 1 for
     /// one scan, summed in a report.
     pub aligned: u32,
     /// Sum of the NIS of the beams that reached the gate (applied or

@@ -293,7 +293,7 @@ fn counts(r: &Report, section: &Section) -> Table {
             ),
         ]);
         t.add_row(vec![
-            "scans with beams cast from their alignment to the map [count]".to_string(),
+            "scans aligned to the map and corrected there [count]".to_string(),
             b.aligned.to_string(),
         ]);
     }
