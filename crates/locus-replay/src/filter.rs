@@ -219,41 +219,24 @@ fn scan_correct(
                 continue;
             }
         };
+        let x = track.belief.x;
+        let from = aligned.as_ref().unwrap_or(&x);
+        out.aligned = u32::from(aligned.is_some());
+        let model = match beam(map, sensor, k, z, from, &x, &track.belief.p, &beams) {
+            Beam::NoSurface => {
+                out.no_surface += 1;
+                continue;
+            }
+            Beam::Short { .. } => {
+                out.short += 1;
+                continue;
+            }
+            Beam::Usable { model, .. } => model,
+        };
         let zv = SVector::<f64, 1>::new(z);
-        let update = match &aligned {
-            Some(a) => {
-                out.aligned = 1;
-                let Some(model) = linearised_beam(map, sensor, k, a, &beams) else {
-                    out.no_surface += 1;
-                    continue;
-                };
-                if is_short(z, &model, &track.belief, &beams) {
-                    out.short += 1;
-                    continue;
-                }
-                match robust {
-                    Some(t) => track.correct_robust(&rules, &t, &model, &zv),
-                    None => track.correct(&rules, &model, &zv),
-                }
-            }
-            None => {
-                let x = &track.belief.x;
-                let model = match beam(map, sensor, k, z, x, x, &track.belief.p, &beams) {
-                    Beam::NoSurface => {
-                        out.no_surface += 1;
-                        continue;
-                    }
-                    Beam::Short { .. } => {
-                        out.short += 1;
-                        continue;
-                    }
-                    Beam::Usable { model, .. } => model,
-                };
-                match robust {
-                    Some(t) => track.correct_robust(&rules, &t, &model, &zv),
-                    None => track.correct(&rules, &model, &zv),
-                }
-            }
+        let update = match robust {
+            Some(t) => track.correct_robust(&rules, &t, &model, &zv),
+            None => track.correct(&rules, &model, &zv),
         };
         let update = match update {
             Ok(u) => u,
@@ -293,6 +276,8 @@ pub(crate) fn chosen_beams(count: usize, per_scan: u32) -> impl Iterator<Item = 
 }
 
 /// What one beam reading gives (`beam`).
+// Returned by value once per beam and matched at once, never stored.
+#[allow(clippy::large_enum_variant)]
 pub(crate) enum Beam {
     /// Its cast meets no surface within range, or meets it grazing or
     /// from behind.
@@ -302,20 +287,18 @@ pub(crate) enum Beam {
     /// deviations of its innovation (variance `s`, m^2): something not in
     /// the map.
     Short { s: f64 },
-    /// It can correct: the model, its residual (reading minus predicted,
-    /// m) and its Jacobian.
-    Usable {
-        model: PlanarBeam<f64>,
-        residual: f64,
-        h: SMatrix<f64, 1, STATE>,
-    },
+    /// It can correct: the model (its Jacobian `model.h`) and its residual
+    /// (reading minus predicted, m).
+    Usable { model: LinearisedAt, residual: f64 },
 }
 
 /// Beam `k` of `sensor`, reading `z` (m), cast in `map` from the state
-/// `from` and evaluated at the state `x` of covariance `p`: the surface
-/// it meets ([`beam_model`]), the range predicted there and whether the
-/// reading is far too short for it. The beam loop (`scan_correct`) and
-/// the scan's alignment (`scan_align.rs`) judge a beam alike through it.
+/// `from` and linearised there ([`LinearisedAt`]), then judged at the
+/// state `x` of covariance `p`: the surface it meets ([`beam_model`]), the
+/// range predicted at `x` and whether the reading is far too short for it.
+/// The beam loop (`scan_correct`: `from` the scan's alignment, else `x`)
+/// and the scan's alignment (`scan_align.rs`: `from` and `x` its iterate)
+/// judge a beam alike through it.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn beam(
     map: &locus_map::Map,
@@ -327,55 +310,28 @@ pub(crate) fn beam(
     p: &StateMatrix,
     beams: &crate::Beams,
 ) -> Beam {
-    let Some(model) = beam_model(map, sensor, k, from, beams) else {
+    let Some(planar) = beam_model(map, sensor, k, from, beams) else {
         return Beam::NoSurface;
     };
     let mut h = SMatrix::<f64, 1, STATE>::zeros();
-    let Some(predicted) = model.evaluate(x, Some(&mut h)) else {
+    let Some(h0) = planar.evaluate(from, Some(&mut h)) else {
         return Beam::NoSurface;
     };
-    let s = (h * p * h.transpose())[(0, 0)] + model.var_range;
+    let model = LinearisedAt {
+        h0: h0[0],
+        h,
+        at: *from,
+        var: planar.var_range,
+    };
+    let Some(predicted) = model.h(x) else {
+        return Beam::NoSurface;
+    };
+    let s = (h * p * h.transpose())[(0, 0)] + model.var;
     let residual = z - predicted[0];
     if residual < -beams.short_sigma * s.sqrt() {
         return Beam::Short { s };
     }
-    Beam::Usable { model, residual, h }
-}
-
-/// Beam `k` of `sensor` cast from the state `a` and linearised there
-/// ([`LinearisedAt`]); `None` where it meets no surface.
-fn linearised_beam(
-    map: &locus_map::Map,
-    sensor: &locus_logs::BeamSensor,
-    k: usize,
-    a: &StateVector,
-    beams: &crate::Beams,
-) -> Option<LinearisedAt> {
-    let planar = beam_model(map, sensor, k, a, beams)?;
-    let mut h = SMatrix::<f64, 1, STATE>::zeros();
-    let h0 = planar.evaluate(a, Some(&mut h))?;
-    Some(LinearisedAt {
-        h0: h0[0],
-        h,
-        at: *a,
-        var: planar.var_range,
-    })
-}
-
-/// Whether reading `z` is shorter than `model` predicts at `belief` by
-/// more than [`Beams::short_sigma`](crate::Beams::short_sigma) standard
-/// deviations of its innovation (something not in the map).
-fn is_short(
-    z: f64,
-    model: &LinearisedAt,
-    belief: &Belief<f64, STATE>,
-    beams: &crate::Beams,
-) -> bool {
-    let Some(predicted) = model.h(&belief.x) else {
-        return false;
-    };
-    let s = (model.h * belief.p * model.h.transpose())[(0, 0)] + model.var;
-    z - predicted[0] < -beams.short_sigma * s.sqrt()
+    Beam::Usable { model, residual }
 }
 
 /// Beam `k` of `sensor` at the state `x`: cast in `map` from the sensor,

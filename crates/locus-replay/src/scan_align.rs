@@ -284,7 +284,7 @@ impl Problem<'_> {
                     cost += rho(short2 * s);
                     continue;
                 }
-                Beam::Usable { residual, h, .. } => (residual, h),
+                Beam::Usable { residual, model } => (residual, model.h),
             };
             let w = (nu + 1.0) / (nu + r * r / var);
             let j = Q::from_fn(|i, _| h[(0, ALIGNED[i])]);
