@@ -23,6 +23,7 @@ use locus_core::nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use locus_core::{Belief, Pose};
 
 pub mod columns;
+pub mod reference_error;
 pub mod relations;
 pub mod results;
 

@@ -302,6 +302,90 @@ pub struct Relations {
     /// The log's odometry alone, composed from scan to scan (no filter,
     /// no calibration, no delay).
     pub odometry: RelationFigures,
+    /// The truth's own error at a pose, from its errors over the relations
+    /// ([`crate::reference_error`]); `None` (`null`) with too few.
+    pub truth_error: Option<TruthError>,
+    /// The filter's (and the smoother's) consistency with the truth at the
+    /// scans, alone and with the truth's own error.
+    pub consistency: ConsistencyAtScans,
+}
+
+/// A truth's own error at one pose, estimated from its errors over
+/// relations measured apart from it ([`crate::reference_error`]: robust,
+/// an upper bound).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TruthError {
+    /// Relations it is estimated from.
+    pub relations: usize,
+    /// Standard deviation of each of x and y, m.
+    pub sigma_xy_m: f64,
+    /// Standard deviation of the heading, rad.
+    pub sigma_heading_rad: f64,
+}
+
+impl From<&crate::reference_error::ReferenceError> for TruthError {
+    fn from(e: &crate::reference_error::ReferenceError) -> Self {
+        Self {
+            relations: e.relations,
+            sigma_xy_m: e.sigma_xy,
+            sigma_heading_rad: e.sigma_theta,
+        }
+    }
+}
+
+/// The filter's and the smoother's [`Consistency`] at the scans.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ConsistencyAtScans {
+    /// The filter's estimate after each scan.
+    pub filter: Consistency,
+    /// The smoother's estimate at each scan (with a smoother only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub smoother: Option<Consistency>,
+}
+
+/// An estimator's consistency with a truth that has its own error
+/// ([`crate::reference_error::Consistency`]): the shares inside 3 sigma and
+/// the mean NEES (3 dof) of the estimate's covariance alone, and of it plus
+/// the truth's error ([`TruthError`]; NaN without one).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Consistency {
+    /// Poses compared.
+    pub compared: usize,
+    /// Share of x errors inside 3 standard deviations of the estimate's.
+    pub within_3_sigma_x_share: f64,
+    /// As `within_3_sigma_x_share`, for y.
+    pub within_3_sigma_y_share: f64,
+    /// As `within_3_sigma_x_share`, for the heading.
+    pub within_3_sigma_heading_share: f64,
+    /// Mean NEES of the estimate's covariance.
+    pub mean_nees: f64,
+    /// Share of x errors inside 3 standard deviations of the estimate's
+    /// variance plus the truth's.
+    pub with_truth_error_within_3_sigma_x_share: f64,
+    /// As `with_truth_error_within_3_sigma_x_share`, for y.
+    pub with_truth_error_within_3_sigma_y_share: f64,
+    /// As `with_truth_error_within_3_sigma_x_share`, for the heading.
+    pub with_truth_error_within_3_sigma_heading_share: f64,
+    /// Mean NEES of the estimate's covariance plus the truth's.
+    pub with_truth_error_mean_nees: f64,
+}
+
+impl From<&crate::reference_error::Consistency> for Consistency {
+    fn from(c: &crate::reference_error::Consistency) -> Self {
+        let [x, y, heading] = c.within_3_sigma;
+        let [rx, ry, rheading] = c.within_3_sigma_with_reference;
+        Self {
+            compared: c.compared,
+            within_3_sigma_x_share: x,
+            within_3_sigma_y_share: y,
+            within_3_sigma_heading_share: heading,
+            mean_nees: c.mean_nees,
+            with_truth_error_within_3_sigma_x_share: rx,
+            with_truth_error_within_3_sigma_y_share: ry,
+            with_truth_error_within_3_sigma_heading_share: rheading,
+            with_truth_error_mean_nees: c.mean_nees_with_reference,
+        }
+    }
 }
 
 #[cfg(test)]

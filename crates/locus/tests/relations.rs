@@ -17,7 +17,13 @@ use serde_json::Value;
 /// The cells after the name of the row of the relations' table (in the
 /// replay's output `text`) whose name starts with `name`.
 fn row(text: &str, name: &str) -> Vec<String> {
-    let table = &text[text.find("relations (").expect("the relations' table")..];
+    row_after(text, "relations (", name)
+}
+
+/// The cells after the name of the first row whose name starts with `name`
+/// in the replay's output `text` after `marker`.
+fn row_after(text: &str, marker: &str, name: &str) -> Vec<String> {
+    let table = &text[text.find(marker).expect("the table's marker")..];
     let line = table
         .lines()
         .find(|l| l.trim_start_matches('│').trim_start().starts_with(name))
@@ -114,6 +120,44 @@ fn the_intel_lab_against_its_relations() {
     let spread = num(&odometry, 2);
     assert!(close(&m["odometry"]["std_translation_m"], spread, 1.0, 3));
 
+    // The truth's own error from the relations: measured 0.0170 m in x and
+    // y, 0.33 deg (robust, upper bounds). It is a fraction of the
+    // relations' mean errors above (each relation joins two poses, and
+    // their mean is above their median).
+    let e = &m["truth_error"];
+    assert_eq!(e["relations"], 105);
+    let (sxy, sh) = (
+        e["sigma_xy_m"].as_f64().unwrap(),
+        e["sigma_heading_rad"].as_f64().unwrap(),
+    );
+    assert!(sxy > 0.005 && sxy < t, "{e:#}");
+    assert!(sh > 0.001 && sh < r / deg, "{e:#}");
+    assert!(
+        text.contains(&format!(
+            "the truth's own error at a pose, from its errors over the 105 relations (robust; \
+             all of their disagreement counted as the truth's, so at most): {sxy:.4} m in x and \
+             in y, {:.2} deg in heading",
+            sh * deg
+        )),
+        "{text}"
+    );
+    // The filter's and the smoother's consistency at the 910 scans: the
+    // truth's error added to an estimate's covariance can only widen its
+    // 3 sigma and shrink its NEES.
+    for name in ["filter", "smoother"] {
+        let c = &m["consistency"][name];
+        assert_eq!(c["compared"], 910, "{c:#}");
+        let f = |k: &str| c[k].as_f64().unwrap_or_else(|| panic!("{k} in {c:#}"));
+        for axis in ["x", "y", "heading"] {
+            let alone = f(&format!("within_3_sigma_{axis}_share"));
+            let with = f(&format!("with_truth_error_within_3_sigma_{axis}_share"));
+            assert!(alone > 0.0 && with >= alone && with <= 1.0, "{c:#}");
+        }
+        assert!(f("with_truth_error_mean_nees") < f("mean_nees"), "{c:#}");
+        let cells = row_after(&text, "at the scans, against the truth", name);
+        assert_eq!(cells[0], "910", "{cells:?}");
+    }
+
     // A wrong offset (the relations' times 0.5 s off the scans'): no
     // relation falls on a scan, and every figure is n/a, not 0.
     let text = replay("wrong-offset", &["--relations-offset", "976052857.837"]);
@@ -123,5 +167,9 @@ fn the_intel_lab_against_its_relations() {
     );
     let truth = row(&text, "corrected poses");
     assert_eq!(truth, ["0", "n/a", "n/a", "n/a", "n/a"]);
+    assert!(
+        text.contains("the truth's own error: n/a (fewer than 10 relations judged)"),
+        "{text}"
+    );
     let _ = fs::remove_dir_all(&dir);
 }

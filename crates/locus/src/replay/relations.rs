@@ -27,8 +27,11 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use comfy_table::Table;
+use locus_core::Belief;
+use locus_core::nalgebra::Matrix3;
+use locus_eval::reference_error::{ReferenceError, consistency, reference_error};
 use locus_eval::relations::{Relation, evaluate_at};
-use locus_eval::results::{RelationFigures, Relations};
+use locus_eval::results::{Consistency, ConsistencyAtScans, RelationFigures, Relations};
 use locus_logs::carmen::Carmen;
 use locus_logs::se2::compose;
 use locus_replay::{EventKind, Step};
@@ -109,6 +112,22 @@ impl Reference {
         }
     }
 
+    /// The truth's own error at a scan, from its errors over the relations
+    /// on scans (`None` with too few).
+    fn truth_error(&self) -> Option<ReferenceError> {
+        reference_error(&self.relations, &self.ends, |i| self.truth.get(i).copied())
+    }
+
+    /// The consistency of the estimates `at` (one per scan) with the truth
+    /// at the scans, alone and with the truth's error `error`.
+    fn consistency(&self, at: &[Option<Estimate>], error: Option<&ReferenceError>) -> Consistency {
+        let pairs = at
+            .iter()
+            .zip(&self.truth)
+            .filter_map(|(e, &t)| e.map(|(x, p)| (x, p, t)));
+        Consistency::from(&consistency(pairs, error))
+    }
+
     /// The errors over the relations on scans of the trajectory `pose`.
     fn figures(&self, pose: impl FnMut(usize) -> Option<[f64; 3]>) -> RelationFigures {
         RelationFigures::from(&evaluate_at(&self.relations, &self.ends, pose))
@@ -116,18 +135,25 @@ impl Reference {
 
     /// The `relations` section: the filter's (and, with `smoothed`, the
     /// smoother's) estimates at the scans, the truth and raw odometry,
-    /// judged over the relations on scans.
+    /// judged over the relations on scans; the truth's own error from them,
+    /// and the estimates' consistency with the truth alone and with it.
     #[must_use]
     pub fn judge(&self, at: &AtScans, smoothed: bool) -> Relations {
+        let error = self.truth_error();
         Relations {
             in_file: self.relations.len(),
             on_scans: self.on_scans,
             ambiguous: self.ambiguous,
             match_tolerance_s: MATCH_TOLERANCE,
-            filter: self.figures(|i| at.filter.get(i).copied().flatten()),
-            smoother: smoothed.then(|| self.figures(|i| at.smoother.get(i).copied().flatten())),
+            filter: self.figures(|i| pose(&at.filter, i)),
+            smoother: smoothed.then(|| self.figures(|i| pose(&at.smoother, i))),
             truth: self.figures(|i| self.truth.get(i).copied()),
             odometry: self.figures(|i| self.odometry.get(i).copied()),
+            truth_error: error.as_ref().map(Into::into),
+            consistency: ConsistencyAtScans {
+                filter: self.consistency(&at.filter, error.as_ref()),
+                smoother: smoothed.then(|| self.consistency(&at.smoother, error.as_ref())),
+            },
         }
     }
 
@@ -163,14 +189,71 @@ impl Reference {
         format!(
             "relations ({}): {} in the file; {} with both ends within {} ms of a scan's stamp, \
              {} of them left out as ambiguous (an end on a scan that two different relation \
-             times fall on)\n{t}\n",
+             times fall on)\n{t}\n{}",
             self.name,
             r.in_file,
             r.on_scans,
             MATCH_TOLERANCE * 1e3,
             r.ambiguous,
+            consistency_table(r),
         )
     }
+}
+
+/// The table of the estimates' consistency with the truth at the scans,
+/// alone and with the truth's own error, after a line giving that error.
+fn consistency_table(r: &Relations) -> String {
+    let deg = 180.0 / core::f64::consts::PI;
+    let error = r.truth_error.map_or_else(
+        || {
+            format!(
+                "the truth's own error: n/a (fewer than {} relations judged)",
+                locus_eval::reference_error::MIN_RELATIONS
+            )
+        },
+        |e| {
+            format!(
+                "the truth's own error at a pose, from its errors over the {} relations \
+                 (robust; all of their disagreement counted as the truth's, so at most): \
+                 {} m in x and in y, {} deg in heading",
+                e.relations,
+                fig(e.sigma_xy_m, 1.0, 4),
+                fig(e.sigma_heading_rad, deg, 2),
+            )
+        },
+    );
+    let mut t: Table = with_header([
+        "at the scans, against the truth",
+        "scans compared [count]",
+        "inside 3 sigma x / y / heading [%]",
+        "mean NEES [-] (3 if honest)",
+        "with the truth's error: inside 3 sigma x / y / heading [%]",
+        "with the truth's error: mean NEES [-]",
+    ]);
+    let shares = |s: [f64; 3]| s.map(|v| fig(v, 100.0, 1)).join(" / ");
+    let rows = [
+        Some(("filter", r.consistency.filter)),
+        r.consistency.smoother.map(|s| ("smoother", s)),
+    ];
+    for (name, c) in rows.into_iter().flatten() {
+        t.add_row(vec![
+            name.to_string(),
+            c.compared.to_string(),
+            shares([
+                c.within_3_sigma_x_share,
+                c.within_3_sigma_y_share,
+                c.within_3_sigma_heading_share,
+            ]),
+            fig(c.mean_nees, 1.0, 2),
+            shares([
+                c.with_truth_error_within_3_sigma_x_share,
+                c.with_truth_error_within_3_sigma_y_share,
+                c.with_truth_error_within_3_sigma_heading_share,
+            ]),
+            fig(c.with_truth_error_mean_nees, 1.0, 2),
+        ]);
+    }
+    format!("{error}\n{t}\n")
 }
 
 /// Leaves out (sets to `None`) the `ends` of the relations with an end on
@@ -202,22 +285,30 @@ fn unambiguous(relations: &[Relation], ends: &mut [Option<(usize, usize)>]) -> u
     left_out
 }
 
+/// An estimate at a scan: the pose and its covariance.
+type Estimate = ([f64; 3], Matrix3<f64>);
+
+/// The pose of the estimate at scan `i`, if any.
+fn pose(at: &[Option<Estimate>], i: usize) -> Option<[f64; 3]> {
+    at.get(i).copied().flatten().map(|(x, _)| x)
+}
+
 /// The replay's estimates at each scan, gathered from its steps.
 #[derive(Debug)]
 pub struct AtScans {
-    filter: Vec<Option<[f64; 3]>>,
-    smoother: Vec<Option<[f64; 3]>>,
+    filter: Vec<Option<Estimate>>,
+    smoother: Vec<Option<Estimate>>,
 }
 
 impl AtScans {
     /// Keeps the estimates of `step` if it is a scan.
     pub fn take(&mut self, step: &Step) {
+        let of = |b: &Belief<f64, 3>| -> Estimate { ([b.x[0], b.x[1], b.x[2]], b.p) };
         if let EventKind::Scan { index, .. } = step.kind
             && let Some(slot) = self.filter.get_mut(index)
         {
-            let x = &step.belief.x;
-            *slot = Some([x[0], x[1], x[2]]);
-            self.smoother[index] = step.smoothed.map(|b| [b.x[0], b.x[1], b.x[2]]);
+            *slot = Some(of(&step.belief));
+            self.smoother[index] = step.smoothed.as_ref().map(of);
         }
     }
 }
