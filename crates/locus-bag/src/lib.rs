@@ -1,0 +1,26 @@
+//! ROS 2 bags for Locus (issue 30): a rosbag2 recording in MCAP, the
+//! default storage since ROS 2 Iron, read with no converter.
+//!
+//! * [`bag`]: the file read record by record ([`read`], [`topics`]), with
+//!   the `mcap` crate's streaming reader; CRCs checked, records bounded.
+//! * [`msgdef`]: the `ros2msg` schemas rosbag2 stores beside each channel,
+//!   parsed, so message types Locus has never seen still decode.
+//! * [`cdr`]: a message's CDR bytes decoded with its schema into a
+//!   [`Value`] tree, read by field path ([`Value::get`]); bounded against
+//!   hostile counts and nesting.
+//!
+//! Every error names where: the file, the record, the topic, the schema's
+//! line, the field and its byte offset ([`BagError`]).
+
+extern crate alloc;
+
+pub mod bag;
+pub mod cdr;
+pub mod error;
+pub mod msgdef;
+pub mod value;
+
+pub use bag::{Channel, RECORD_LIMIT, RawMessage, Topic, read, topics};
+pub use error::{BagError, CdrError, SchemaError};
+pub use msgdef::Definitions;
+pub use value::{Message, Value};
