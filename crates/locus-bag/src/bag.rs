@@ -215,6 +215,8 @@ pub struct Topic {
     pub last_ns: u64,
     /// Why Locus cannot decode it, if it cannot.
     pub undecodable: Option<String>,
+    /// The names of its message type's fields (empty if undecodable).
+    pub fields: Vec<String>,
 }
 
 /// The topics of the bag at `path`, in the order their channels appear
@@ -237,6 +239,10 @@ pub fn topics(path: &Path) -> Result<Vec<Topic>, BagError> {
                 first_ns: m.log_time_ns,
                 last_ns: m.log_time_ns,
                 undecodable: c.definitions.as_ref().err().cloned(),
+                fields: c.definitions.as_ref().map_or_else(
+                    |_| Vec::new(),
+                    |d| d.root.fields.iter().map(|f| f.name.to_string()).collect(),
+                ),
             }
         });
         t.count += 1;

@@ -79,4 +79,40 @@ pub enum BagError {
         /// Where in the message, and what.
         source: Box<CdrError>,
     },
+    /// A mapped field that a message of its topic does not have, or has
+    /// of another kind.
+    #[error("{}: record {record}: {problem}", file.display())]
+    Field {
+        /// The bag.
+        file: PathBuf,
+        /// The record's ordinal in the file, 1-based.
+        record: u64,
+        /// The topic, its type, the field and what is wrong.
+        problem: Box<FieldProblem>,
+    },
+    /// A mapping that does not fit the bag: a topic it does not have, a
+    /// frame `/tf_static` does not reach.
+    #[error("{file}: {key}: {reason}")]
+    Mapping {
+        /// The mapping file.
+        file: String,
+        /// The mapping's key.
+        key: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// A mapped field a message does not have, or has of another kind.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("topic {topic} ({type_name}), field {field}: {reason}")]
+pub struct FieldProblem {
+    /// The topic.
+    pub topic: String,
+    /// Its message type.
+    pub type_name: String,
+    /// The field's path (or the mapping's key).
+    pub field: String,
+    /// What is wrong.
+    pub reason: String,
 }

@@ -9,6 +9,11 @@
 //!   [`Value`] tree, read by field path ([`Value::get`]); bounded against
 //!   hostile counts and nesting.
 //!
+//! * [`mapping`] and [`convert`]: which topics and fields are the
+//!   velocities, the landmark sightings and the truth (a small TOML file),
+//!   and the bag read as a Locus log by it ([`convert::to_locus`]), the
+//!   sensor's mount from `/tf_static`.
+//!
 //! Every error names where: the file, the record, the topic, the schema's
 //! line, the field and its byte offset ([`BagError`]).
 
@@ -16,11 +21,14 @@ extern crate alloc;
 
 pub mod bag;
 pub mod cdr;
+pub mod convert;
 pub mod error;
+pub mod mapping;
 pub mod msgdef;
 pub mod value;
 
 pub use bag::{Channel, RECORD_LIMIT, RawMessage, Topic, read, topics};
-pub use error::{BagError, CdrError, SchemaError};
+pub use error::{BagError, CdrError, FieldProblem, SchemaError};
+pub use mapping::Mapping;
 pub use msgdef::Definitions;
 pub use value::{Message, Value};

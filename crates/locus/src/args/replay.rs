@@ -75,6 +75,28 @@ pub enum Source {
         #[command(flatten)]
         common: Flags,
     },
+    /// A ROS 2 bag (rosbag2, MCAP storage: `FILE.mcap`). Its messages are
+    /// decoded with the schemas stored in the file, so any message type
+    /// reads; `--topics MAPPING.toml` says which topics and fields are the
+    /// velocities, the landmark sightings and the truth, and holds the
+    /// landmark map (docs/bags.md). The landmark sensor's mount comes from
+    /// `/tf_static`. `--list` prints the topics and proposes a mapping.
+    Bag {
+        /// The bag (`.mcap`).
+        file: PathBuf,
+        /// The mapping of topics and fields (TOML, docs/bags.md).
+        #[arg(long, required_unless_present = "list")]
+        topics: Option<PathBuf>,
+        /// Print the bag's topics, types and message counts (as `ros2 bag
+        /// info` does) and a proposed mapping, and stop.
+        #[arg(long)]
+        list: bool,
+        /// Also write the log in Locus's CSV format to this file.
+        #[arg(long)]
+        export: Option<PathBuf>,
+        #[command(flatten)]
+        common: Flags,
+    },
     /// A CARMEN log with corrected poses (e.g.
     /// `../shared/data/intel_lab/intel-corrected.log.gz`): laser scans,
     /// raw odometry, the corrected poses as truth at the scan times. The
@@ -190,6 +212,24 @@ impl Source {
                     export.as_ref(),
                     common,
                 )
+            }
+            Self::Bag {
+                file,
+                topics,
+                export,
+                common,
+                ..
+            } => {
+                let mapping_path = topics
+                    .as_ref()
+                    .context("--topics MAPPING.toml is needed to replay a bag")?;
+                let text = std::fs::read_to_string(mapping_path)
+                    .with_context(|| format!("reading the mapping {}", mapping_path.display()))?;
+                let shown = mapping_path.display().to_string();
+                let mapping =
+                    locus_bag::Mapping::from_toml(&text, &shown).map_err(anyhow::Error::msg)?;
+                let log = locus_bag::convert::to_locus(file, &mapping, &shown)?;
+                (Log::from_locus(&name(file), log)?, export.as_ref(), common)
             }
             Self::Carmen {
                 file,

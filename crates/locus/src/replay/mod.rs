@@ -29,6 +29,7 @@ use crate::output::{print_out, progress_bar};
 use crate::run::files_written;
 use crate::table::{fig, with_header};
 
+mod bag;
 pub mod relations;
 
 /// Arguments of `locus replay`.
@@ -44,6 +45,13 @@ pub struct Args {
 /// A log that cannot be read (file and line named), an invalid setting, a
 /// file that cannot be written.
 pub fn run(args: &Args) -> Result<()> {
+    if let Source::Bag {
+        file, list: true, ..
+    } = &args.source
+    {
+        print!("{}", bag::list(file)?);
+        return Ok(());
+    }
     let mut loaded = args.source.read()?;
     if let Some([x, y, theta]) = loaded.flags.start {
         let t0 = loaded.log.odometry.first().map_or(0.0, |o| o.time);

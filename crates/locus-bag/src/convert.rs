@@ -1,0 +1,478 @@
+//! A bag as a Locus log ([`LocusLog`], the one every replay source becomes):
+//! the mapping's velocity topic as odometry, its landmark topic as
+//! sightings, its truth topic as ground truth, `/tf_static` as the
+//! landmark sensor's mount, and the mapping's landmark map.
+//!
+//! Times: a stamp `builtin_interfaces/Time` `(sec, nanosec)` is
+//! `sec + nanosec * 1e-9` s; a log time (ns) alike. Headings: the yaw of a
+//! quaternion, `atan2(2 (w z + x y), 1 - 2 (y^2 + z^2))`.
+
+use std::collections::{HashMap, HashSet};
+use std::path::Path;
+
+use locus_logs::locus_csv::{LandmarkMeasurement, LocusLog, MapLandmark};
+use locus_logs::mrclam::{Groundtruth, Odometry, TruthPose};
+use locus_logs::sensor::SensorMount;
+
+use crate::bag::{Channel, RawMessage, read};
+use crate::error::{BagError, FieldProblem};
+use crate::mapping::{Defaults, Mapping};
+use crate::value::Value;
+
+/// The static transforms' topic.
+pub const TF_STATIC: &str = "/tf_static";
+
+/// A time in seconds from whole seconds and nanoseconds.
+#[allow(clippy::cast_precision_loss)]
+fn seconds(sec: i64, nanosec: u64) -> f64 {
+    sec as f64 + nanosec as f64 * 1e-9
+}
+
+/// A log time (ns) in seconds.
+#[allow(clippy::cast_possible_wrap)]
+fn log_seconds(ns: u64) -> f64 {
+    seconds((ns / 1_000_000_000) as i64, ns % 1_000_000_000)
+}
+
+/// The yaw of a quaternion `[x, y, z, w]`, rad.
+fn yaw([x, y, z, w]: [f64; 4]) -> f64 {
+    (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
+}
+
+/// One planar transform: `child` in `parent`'s frame.
+#[derive(Debug, Clone, Copy)]
+struct Planar {
+    x: f64,
+    y: f64,
+    yaw: f64,
+}
+
+/// Reads fields of one message, naming the topic, type and field on error.
+struct Fields<'a> {
+    file: &'a Path,
+    channel: &'a Channel,
+    record: u64,
+    value: &'a Value,
+}
+
+impl Fields<'_> {
+    fn error(&self, field: &str, reason: impl Into<String>) -> BagError {
+        BagError::Field {
+            file: self.file.to_path_buf(),
+            record: self.record,
+            problem: Box::new(FieldProblem {
+                topic: self.channel.topic.clone(),
+                type_name: self.channel.type_name.clone(),
+                field: field.to_string(),
+                reason: reason.into(),
+            }),
+        }
+    }
+
+    fn at<'v>(&self, within: &'v Value, path: &str) -> Result<&'v Value, BagError> {
+        within
+            .get(path)
+            .ok_or_else(|| self.error(path, "no such field in the message"))
+    }
+
+    fn number(&self, within: &Value, path: &str) -> Result<f64, BagError> {
+        self.at(within, path)?
+            .as_f64()
+            .ok_or_else(|| self.error(path, "not a number"))
+    }
+
+    /// A stamp at `path` (`sec`, `nanosec`), in s.
+    fn stamp(&self, path: &str) -> Result<f64, BagError> {
+        let v = self.at(self.value, path)?;
+        let (Some(Value::Int(sec)), Some(Value::UInt(ns))) = (v.get("sec"), v.get("nanosec"))
+        else {
+            return Err(self.error(path, "not a builtin_interfaces/Time (sec, nanosec)"));
+        };
+        Ok(seconds(*sec, *ns))
+    }
+
+    /// The message's time: the stamp at `path`, its `header.stamp` when
+    /// `path` is not given and it has a header, else the log time.
+    fn time(&self, path: Option<&str>, log_time_ns: u64) -> Result<f64, BagError> {
+        match path {
+            Some("") => Ok(log_seconds(log_time_ns)),
+            Some(p) => self.stamp(p),
+            None if self.value.get("header.stamp").is_some() => self.stamp("header.stamp"),
+            None => Ok(log_seconds(log_time_ns)),
+        }
+    }
+
+    /// The path given, or the type's usual one, or an error saying which
+    /// key to set.
+    fn path<'p>(
+        &self,
+        given: Option<&'p str>,
+        usual: Option<&'p str>,
+        key: &str,
+    ) -> Result<&'p str, BagError> {
+        given.or(usual).ok_or_else(|| {
+            self.error(
+                key,
+                format!(
+                    "no usual field for type {}: set `{key}` in the mapping",
+                    self.channel.type_name
+                ),
+            )
+        })
+    }
+}
+
+/// What the bag gives, as it is read.
+#[derive(Default)]
+struct Gathered {
+    odometry: Vec<Odometry>,
+    measurements: Vec<LandmarkMeasurement>,
+    truth: Vec<TruthPose>,
+    /// Static transforms by child frame: (parent, transform).
+    tf: HashMap<String, (String, Planar)>,
+    /// The landmark messages' frame, as they name it.
+    sensor_frame: Option<String>,
+    truth_has_heading: Option<bool>,
+    /// Topics seen, for the error when a mapped one is missing.
+    topics: Vec<String>,
+}
+
+/// Reads the bag at `path` as a Locus log, by `mapping` (`mapping_file`
+/// names it in errors).
+///
+/// # Errors
+/// The bag cannot be read ([`read`]); a mapped topic is not in it; a
+/// mapped field is not in its messages or not a number; times that go
+/// back on the velocity or truth topic; the sensor's frame not reachable
+/// from `base_frame` in `/tf_static`.
+pub fn to_locus(path: &Path, mapping: &Mapping, mapping_file: &str) -> Result<LocusLog, BagError> {
+    let mut g = Gathered::default();
+    let mut seen: HashSet<String> = HashSet::new();
+    read(path, |channel, m| {
+        if seen.insert(channel.topic.clone()) {
+            g.topics.push(channel.topic.clone());
+        }
+        let topic = channel.topic.as_str();
+        let wanted = topic == mapping.velocity.topic
+            || mapping.landmarks.as_ref().is_some_and(|l| l.topic == topic)
+            || mapping.truth.as_ref().is_some_and(|t| t.topic == topic)
+            || topic == TF_STATIC;
+        if !wanted {
+            return Ok(());
+        }
+        let value = channel.decode(path, m)?;
+        let f = Fields {
+            file: path,
+            channel,
+            record: m.record,
+            value: &value,
+        };
+        take(&f, m, mapping, &mut g)
+    })?;
+    let missing = |key: &str, topic: &str| BagError::Mapping {
+        file: mapping_file.to_string(),
+        key: key.to_string(),
+        reason: format!(
+            "topic {topic} is not in the bag {} (its topics: {})",
+            path.display(),
+            g.topics.join(", ")
+        ),
+    };
+    if !seen.contains(&mapping.velocity.topic) {
+        return Err(missing("velocity.topic", &mapping.velocity.topic));
+    }
+    if let Some(l) = &mapping.landmarks
+        && !seen.contains(&l.topic)
+    {
+        return Err(missing("landmarks.topic", &l.topic));
+    }
+    if let Some(t) = &mapping.truth
+        && !seen.contains(&t.topic)
+    {
+        return Err(missing("truth.topic", &t.topic));
+    }
+    let frame = mapping
+        .landmarks
+        .as_ref()
+        .and_then(|l| l.frame.clone())
+        .or(g.sensor_frame.clone());
+    let sensor = match frame {
+        Some(frame) if frame != mapping.base_frame && !frame.is_empty() => {
+            let p = mount(&g.tf, &mapping.base_frame, &frame).ok_or_else(|| BagError::Mapping {
+                file: mapping_file.to_string(),
+                key: "base_frame".into(),
+                reason: format!(
+                    "the sensor's frame {frame} is not below {} in {TF_STATIC} of {}",
+                    mapping.base_frame,
+                    path.display()
+                ),
+            })?;
+            Some(SensorMount {
+                x: p.x,
+                y: p.y,
+                yaw: p.yaw,
+            })
+        }
+        _ => None,
+    };
+    let truth = if g.truth_has_heading == Some(false) {
+        Groundtruth::positions(g.truth)
+    } else {
+        Groundtruth::new(g.truth)
+    };
+    let truth = truth.ok_or_else(|| BagError::Mapping {
+        file: mapping_file.to_string(),
+        key: "truth.topic".into(),
+        reason: "the truth's times go back".into(),
+    })?;
+    Ok(LocusLog {
+        sensor,
+        landmarks: mapping
+            .landmark_map
+            .iter()
+            .map(|l| MapLandmark {
+                id: l.id,
+                x: l.x,
+                y: l.y,
+            })
+            .collect(),
+        odometry: g.odometry,
+        measurements: g.measurements,
+        truth,
+        ..LocusLog::default()
+    })
+}
+
+/// The transform of `frame` in `base`, composed through `tf`'s parents.
+fn mount(tf: &HashMap<String, (String, Planar)>, base: &str, frame: &str) -> Option<Planar> {
+    let mut at = Planar {
+        x: 0.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
+    let mut child = frame;
+    for _ in 0..32 {
+        if child == base {
+            return Some(at);
+        }
+        let (parent, p) = tf.get(child)?;
+        let (s, c) = p.yaw.sin_cos();
+        at = Planar {
+            x: p.x + c * at.x - s * at.y,
+            y: p.y + s * at.x + c * at.y,
+            yaw: locus_core::wrap_angle(p.yaw + at.yaw),
+        };
+        child = parent;
+    }
+    None
+}
+
+/// Takes one decoded message into `g`.
+fn take(
+    f: &Fields<'_>,
+    m: &RawMessage<'_>,
+    mapping: &Mapping,
+    g: &mut Gathered,
+) -> Result<(), BagError> {
+    let topic = f.channel.topic.as_str();
+    let ty = f.channel.type_name.as_str();
+    if topic == TF_STATIC {
+        let list = f.at(f.value, "transforms")?;
+        for (i, t) in list.as_list().unwrap_or_default().iter().enumerate() {
+            let at = |p: &str| format!("transforms[{i}].{p}");
+            let text = |p: &str| -> Result<String, BagError> {
+                f.at(t, p)?
+                    .as_str()
+                    .map(str::to_string)
+                    .ok_or_else(|| f.error(&at(p), "not a string"))
+            };
+            let q = |k: &str| f.number(t, &format!("transform.rotation.{k}"));
+            g.tf.insert(
+                text("child_frame_id")?,
+                (
+                    text("header.frame_id")?,
+                    Planar {
+                        x: f.number(t, "transform.translation.x")?,
+                        y: f.number(t, "transform.translation.y")?,
+                        yaw: yaw([q("x")?, q("y")?, q("z")?, q("w")?]),
+                    },
+                ),
+            );
+        }
+    }
+    if topic == mapping.velocity.topic {
+        let v = &mapping.velocity;
+        let usual = Defaults::velocity(ty);
+        let linear = f.path(v.linear.as_deref(), usual.map(|u| u.0), "velocity.linear")?;
+        let angular = f.path(v.angular.as_deref(), usual.map(|u| u.1), "velocity.angular")?;
+        let time = f.time(v.stamp.as_deref(), m.log_time_ns)?;
+        if g.odometry.last().is_some_and(|o| time < o.time) {
+            return Err(f.error(
+                v.stamp.as_deref().unwrap_or("time"),
+                format!("velocity at {time} s is before the one before it"),
+            ));
+        }
+        g.odometry.push(Odometry {
+            time,
+            v: f.number(f.value, linear)?,
+            omega: f.number(f.value, angular)?,
+        });
+    }
+    if let Some(l) = mapping.landmarks.as_ref().filter(|l| l.topic == topic) {
+        let time = f.time(l.stamp.as_deref(), m.log_time_ns)?;
+        if g.sensor_frame.is_none()
+            && let Some(frame) = f.value.get("header.frame_id").and_then(Value::as_str)
+        {
+            g.sensor_frame = Some(frame.to_string());
+        }
+        let one;
+        let sightings: &[Value] = match &l.list {
+            Some(p) => f
+                .at(f.value, p)?
+                .as_list()
+                .ok_or_else(|| f.error(p, "not a list"))?,
+            None => {
+                one = [f.value.clone()];
+                &one
+            }
+        };
+        for s in sightings {
+            let id = f.number(s, &l.id)?;
+            if !(id >= 0.0 && id <= f64::from(u32::MAX) && id.fract() == 0.0) {
+                return Err(f.error(&l.id, format!("{id} is not a landmark id")));
+            }
+            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+            g.measurements.push(LandmarkMeasurement {
+                time,
+                id: id as u32,
+                range: f.number(s, &l.range)?,
+                bearing: if l.bearing.is_empty() {
+                    None
+                } else {
+                    Some(f.number(s, &l.bearing)?)
+                },
+            });
+        }
+    }
+    if let Some(t) = mapping.truth.as_ref().filter(|t| t.topic == topic) {
+        let usual = Defaults::pose(ty);
+        let position = f.path(t.position.as_deref(), usual.map(|u| u.0), "truth.position")?;
+        let orientation = f.path(
+            t.orientation.as_deref(),
+            usual.map(|u| u.1),
+            "truth.orientation",
+        )?;
+        let time = f.time(t.stamp.as_deref(), m.log_time_ns)?;
+        let at = |k: &str| format!("{position}.{k}");
+        let theta = if orientation.is_empty() {
+            None
+        } else {
+            let q = |k: &str| f.number(f.value, &format!("{orientation}.{k}"));
+            Some(yaw([q("x")?, q("y")?, q("z")?, q("w")?]))
+        };
+        g.truth_has_heading = Some(theta.is_some());
+        g.truth.push(TruthPose {
+            time,
+            x: f.number(f.value, &at("x"))?,
+            y: f.number(f.value, &at("y"))?,
+            theta: theta.unwrap_or(0.0),
+        });
+    }
+    Ok(())
+}
+
+/// A proposed mapping for the topics `topics` (name, type) of a bag: the
+/// first velocity-like topic, the first pose-like topic whose name says
+/// truth (`mocap`, `truth`, `ground`, `vicon`), and the first topic of a
+/// type with `id` and `range` fields (`fields` of a type, if known).
+#[must_use]
+pub fn propose(topics: &[(String, String)], fields: &dyn Fn(&str) -> Vec<String>) -> String {
+    let mut out = String::new();
+    let velocity = topics
+        .iter()
+        .find(|(_, ty)| ty.ends_with("/Twist") || ty.ends_with("/TwistStamped"))
+        .or_else(|| {
+            topics
+                .iter()
+                .find(|(_, ty)| Defaults::velocity(ty).is_some())
+        });
+    match velocity {
+        Some((t, ty)) => out.push_str(&format!("[velocity]\ntopic = \"{t}\"  # {ty}\n")),
+        None => out.push_str("# no velocity topic found (Twist, TwistStamped or Odometry): set one\n[velocity]\ntopic = \"\"\n"),
+    }
+    let truthy = ["mocap", "truth", "ground", "vicon", "optitrack"];
+    if let Some((t, ty)) = topics.iter().find(|(t, ty)| {
+        Defaults::pose(ty).is_some() && truthy.iter().any(|w| t.to_lowercase().contains(w))
+    }) {
+        out.push_str(&format!("\n[truth]\ntopic = \"{t}\"  # {ty}\n"));
+    }
+    if let Some((t, ty)) = topics.iter().find(|(_, ty)| {
+        let f = fields(ty);
+        f.iter().any(|x| x == "id") && f.iter().any(|x| x == "range")
+    }) {
+        out.push_str(&format!(
+            "\n[landmarks]\ntopic = \"{t}\"  # {ty}\n\n# the landmark map: one entry per landmark\n# [[landmark]]\n# id = 1\n# x = 0.0\n# y = 0.0\n"
+        ));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_mount_composes_static_transforms_up_to_the_base() {
+        // base_link -> arm (1 m ahead, turned 90 deg) -> camera (0.5 m
+        // ahead of the arm, turned 90 deg more): the camera is at (1, 0.5),
+        // turned 180 deg.
+        let mut tf = HashMap::new();
+        let q = |yaw: f64| [0.0, 0.0, (yaw / 2.0).sin(), (yaw / 2.0).cos()];
+        let half_pi = core::f64::consts::FRAC_PI_2;
+        tf.insert(
+            "arm".to_string(),
+            (
+                "base_link".to_string(),
+                Planar {
+                    x: 1.0,
+                    y: 0.0,
+                    yaw: yaw(q(half_pi)),
+                },
+            ),
+        );
+        tf.insert(
+            "camera".to_string(),
+            (
+                "arm".to_string(),
+                Planar {
+                    x: 0.5,
+                    y: 0.0,
+                    yaw: yaw(q(half_pi)),
+                },
+            ),
+        );
+        let m = mount(&tf, "base_link", "camera").unwrap();
+        assert!(
+            (m.x - 1.0).abs() < 1e-15 && (m.y - 0.5).abs() < 1e-15,
+            "{m:?}"
+        );
+        assert!((m.yaw.abs() - core::f64::consts::PI).abs() < 1e-15, "{m:?}");
+        assert!(mount(&tf, "odom", "camera").is_none());
+        // A loop in the transforms ends.
+        tf.insert("base_link".to_string(), ("camera".to_string(), tf["arm"].1));
+        assert!(mount(&tf, "world", "camera").is_none());
+    }
+
+    #[test]
+    fn a_stamp_round_trips_a_time_to_the_bit() {
+        for t in [1_248_444_188.086, 1_248_444_175.103, 0.5, 12.000_000_001] {
+            let sec = f64::floor(t);
+            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+            let ns = ((t - sec) * 1e9).round() as u64;
+            #[allow(clippy::cast_possible_truncation)]
+            let back = seconds(sec as i64, ns);
+            assert_eq!(back.to_bits(), t.to_bits(), "{t}");
+        }
+        assert_eq!(log_seconds(1_500_000_000), 1.5);
+    }
+}
