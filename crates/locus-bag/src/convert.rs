@@ -10,9 +10,13 @@
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
+use locus_logs::BeamSensor;
+use locus_logs::beam_sensor::{MAX_BEAMS, MAX_RANGE_LIMIT};
 use locus_logs::locus_csv::{LandmarkMeasurement, LocusLog, MapLandmark};
 use locus_logs::mrclam::{Groundtruth, Odometry, TruthPose};
+use locus_logs::scans::Scans;
 use locus_logs::sensor::SensorMount;
+use locus_logs::wall::{MapPath, Wall};
 
 use crate::bag::{Channel, RawMessage, read};
 use crate::error::{BagError, FieldProblem};
@@ -135,6 +139,12 @@ struct Gathered {
     truth_has_heading: Option<bool>,
     /// Topics seen, for the error when a mapped one is missing.
     topics: Vec<String>,
+    /// The beam sensors of the scan and range topics (in the mapping's
+    /// order, scans first), once their first message is read, with their
+    /// frame.
+    beams: Vec<Option<(BeamSensor, String)>>,
+    /// Their readings: time, sensor id, ranges as stored.
+    readings: Vec<(f64, u32, Vec<f32>)>,
 }
 
 /// Reads the bag at `path` as a Locus log, by `mapping` (`mapping_file`
@@ -146,7 +156,16 @@ struct Gathered {
 /// back on the velocity or truth topic; the sensor's frame not reachable
 /// from `base_frame` in `/tf_static`.
 pub fn to_locus(path: &Path, mapping: &Mapping, mapping_file: &str) -> Result<LocusLog, BagError> {
-    let mut g = Gathered::default();
+    let beam_topics: Vec<&str> = mapping
+        .scans
+        .iter()
+        .chain(&mapping.ranges)
+        .map(|b| b.topic.as_str())
+        .collect();
+    let mut g = Gathered {
+        beams: vec![None; beam_topics.len()],
+        ..Gathered::default()
+    };
     let mut seen: HashSet<String> = HashSet::new();
     read(path, |channel, m| {
         if seen.insert(channel.topic.clone()) {
@@ -156,6 +175,7 @@ pub fn to_locus(path: &Path, mapping: &Mapping, mapping_file: &str) -> Result<Lo
         let wanted = topic == mapping.velocity.topic
             || mapping.landmarks.as_ref().is_some_and(|l| l.topic == topic)
             || mapping.truth.as_ref().is_some_and(|t| t.topic == topic)
+            || beam_topics.contains(&topic)
             || topic == TF_STATIC;
         if !wanted {
             return Ok(());
@@ -191,6 +211,45 @@ pub fn to_locus(path: &Path, mapping: &Mapping, mapping_file: &str) -> Result<Lo
     {
         return Err(missing("truth.topic", &t.topic));
     }
+    for (i, b) in mapping.scans.iter().chain(&mapping.ranges).enumerate() {
+        let key = if i < mapping.scans.len() {
+            "scan"
+        } else {
+            "range"
+        };
+        if !seen.contains(&b.topic) {
+            return Err(missing(&format!("{key}.topic"), &b.topic));
+        }
+    }
+    let no_frame = |frame: &str| BagError::Mapping {
+        file: mapping_file.to_string(),
+        key: "base_frame".into(),
+        reason: format!(
+            "the sensor's frame {frame} is not below {} in {TF_STATIC} of {}",
+            mapping.base_frame,
+            path.display()
+        ),
+    };
+    let mut beam_sensors = Vec::new();
+    for (sensor, frame) in g.beams.iter().flatten() {
+        let mut sensor = *sensor;
+        if !frame.is_empty() && *frame != mapping.base_frame {
+            let p = mount(&g.tf, &mapping.base_frame, frame).ok_or_else(|| no_frame(frame))?;
+            sensor.mount = SensorMount {
+                x: p.x,
+                y: p.y,
+                yaw: p.yaw,
+            };
+        }
+        beam_sensors.push(sensor);
+    }
+    // A log's scans come in time order; a bag's topics interleave.
+    g.readings.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut scans =
+        Scans::with_capacity(g.readings.len(), g.readings.iter().map(|r| r.2.len()).sum());
+    for (time, sensor, ranges) in &g.readings {
+        scans.push(*time, *sensor, ranges);
+    }
     let frame = mapping
         .landmarks
         .as_ref()
@@ -198,15 +257,7 @@ pub fn to_locus(path: &Path, mapping: &Mapping, mapping_file: &str) -> Result<Lo
         .or(g.sensor_frame.clone());
     let sensor = match frame {
         Some(frame) if frame != mapping.base_frame && !frame.is_empty() => {
-            let p = mount(&g.tf, &mapping.base_frame, &frame).ok_or_else(|| BagError::Mapping {
-                file: mapping_file.to_string(),
-                key: "base_frame".into(),
-                reason: format!(
-                    "the sensor's frame {frame} is not below {} in {TF_STATIC} of {}",
-                    mapping.base_frame,
-                    path.display()
-                ),
-            })?;
+            let p = mount(&g.tf, &mapping.base_frame, &frame).ok_or_else(|| no_frame(&frame))?;
             Some(SensorMount {
                 x: p.x,
                 y: p.y,
@@ -239,6 +290,19 @@ pub fn to_locus(path: &Path, mapping: &Mapping, mapping_file: &str) -> Result<Lo
         odometry: g.odometry,
         measurements: g.measurements,
         truth,
+        map: mapping.map.as_deref().and_then(MapPath::new),
+        walls: mapping
+            .walls
+            .iter()
+            .map(|w| Wall {
+                x1: w.x1,
+                y1: w.y1,
+                x2: w.x2,
+                y2: w.y2,
+            })
+            .collect(),
+        beam_sensors,
+        scans,
         ..LocusLog::default()
     })
 }
@@ -354,6 +418,42 @@ fn take(
             });
         }
     }
+    let beam_topics = mapping.scans.iter().chain(&mapping.ranges).enumerate();
+    for (i, b) in beam_topics.filter(|(_, b)| b.topic == topic) {
+        let id = u32::try_from(i).unwrap_or(u32::MAX);
+        let time = f.time(b.stamp.as_deref(), m.log_time_ns)?;
+        let is_scan = i < mapping.scans.len();
+        let (sensor, ranges) = if is_scan { scan(f, id)? } else { range(f, id)? };
+        let frame = b
+            .frame
+            .clone()
+            .or_else(|| {
+                f.value
+                    .get("header.frame_id")
+                    .and_then(Value::as_str)
+                    .map(str::to_string)
+            })
+            .unwrap_or_default();
+        match &g.beams[i] {
+            None => g.beams[i] = Some((sensor, frame)),
+            Some((first, _)) => {
+                if (first.count, first.angle_0, first.angle_step)
+                    != (sensor.count, sensor.angle_0, sensor.angle_step)
+                {
+                    return Err(f.error(
+                        if is_scan { "ranges" } else { "range" },
+                        format!(
+                            "{} beams from {} rad by {} rad, where the topic's first message had {} from {} by {}",
+                            sensor.count, sensor.angle_0, sensor.angle_step, first.count, first.angle_0, first.angle_step
+                        ),
+                    ));
+                }
+            }
+        }
+        let sensor = g.beams[i].as_ref().map_or(sensor, |(s, _)| *s);
+        let stored = ranges.iter().map(|&r| sensor.reading(r)).collect();
+        g.readings.push((time, id, stored));
+    }
     if let Some(t) = mapping.truth.as_ref().filter(|t| t.topic == topic) {
         let usual = Defaults::pose(ty);
         let position = f.path(t.position.as_deref(), usual.map(|u| u.0), "truth.position")?;
@@ -381,6 +481,74 @@ fn take(
     Ok(())
 }
 
+/// The limits `[min, max]` of a range sensor's message, checked.
+fn limits(f: &Fields<'_>, min: &str, max: &str) -> Result<(f64, f64), BagError> {
+    let (lo, hi) = (f.number(f.value, min)?, f.number(f.value, max)?);
+    if !(lo >= 0.0 && hi > lo && hi <= MAX_RANGE_LIMIT) {
+        return Err(f.error(
+            max,
+            format!("range limits [{lo}, {hi}] m: need 0 <= min < max <= {MAX_RANGE_LIMIT}"),
+        ));
+    }
+    Ok((lo, hi))
+}
+
+/// A `sensor_msgs/msg/LaserScan` as beam sensor `id` (at the robot's
+/// centre until its mount is known) and its ranges.
+fn scan(f: &Fields<'_>, id: u32) -> Result<(BeamSensor, Vec<f64>), BagError> {
+    let (min_range, max_range) = limits(f, "range_min", "range_max")?;
+    let ranges = f
+        .at(f.value, "ranges")?
+        .as_list()
+        .ok_or_else(|| f.error("ranges", "not a list"))?;
+    let count = u32::try_from(ranges.len())
+        .ok()
+        .filter(|&n| (1..=MAX_BEAMS).contains(&n))
+        .ok_or_else(|| {
+            f.error(
+                "ranges",
+                format!("{} ranges: need 1 to {MAX_BEAMS}", ranges.len()),
+            )
+        })?;
+    let sensor = BeamSensor {
+        id,
+        mount: SensorMount {
+            x: 0.0,
+            y: 0.0,
+            yaw: 0.0,
+        },
+        min_range,
+        max_range,
+        angle_0: f.number(f.value, "angle_min")?,
+        angle_step: f.number(f.value, "angle_increment")?,
+        count,
+    };
+    let values = ranges
+        .iter()
+        .map(|r| r.as_f64().ok_or_else(|| f.error("ranges", "not numbers")))
+        .collect::<Result<_, _>>()?;
+    Ok((sensor, values))
+}
+
+/// A `sensor_msgs/msg/Range` as one-beam sensor `id` and its range.
+fn range(f: &Fields<'_>, id: u32) -> Result<(BeamSensor, Vec<f64>), BagError> {
+    let (min_range, max_range) = limits(f, "min_range", "max_range")?;
+    let sensor = BeamSensor {
+        id,
+        mount: SensorMount {
+            x: 0.0,
+            y: 0.0,
+            yaw: 0.0,
+        },
+        min_range,
+        max_range,
+        angle_0: 0.0,
+        angle_step: 0.0,
+        count: 1,
+    };
+    Ok((sensor, vec![f.number(f.value, "range")?]))
+}
+
 /// A proposed mapping for the topics `topics` (name, type) of a bag: the
 /// first velocity-like topic, the first pose-like topic whose name says
 /// truth (`mocap`, `truth`, `ground`, `vicon`), and the first topic of a
@@ -405,6 +573,19 @@ pub fn propose(topics: &[(String, String)], fields: &dyn Fn(&str) -> Vec<String>
         Defaults::pose(ty).is_some() && truthy.iter().any(|w| t.to_lowercase().contains(w))
     }) {
         out.push_str(&format!("\n[truth]\ntopic = \"{t}\"  # {ty}\n"));
+    }
+    for (t, ty) in topics {
+        match ty.as_str() {
+            "sensor_msgs/msg/LaserScan" => out.push_str(&format!("\n[[scan]]\ntopic = \"{t}\"\n")),
+            "sensor_msgs/msg/Range" => out.push_str(&format!("\n[[range]]\ntopic = \"{t}\"\n")),
+            _ => {}
+        }
+    }
+    if topics
+        .iter()
+        .any(|(_, ty)| ty == "sensor_msgs/msg/LaserScan" || ty == "sensor_msgs/msg/Range")
+    {
+        out.insert_str(0, "map = \"\"  # the map the ranges are corrected against (docs/maps.md), relative to this file\n\n");
     }
     if let Some((t, ty)) = topics.iter().find(|(_, ty)| {
         let f = fields(ty);

@@ -2,6 +2,9 @@
 //! TOML file (docs/bags.md), for example
 //!
 //! ```toml
+//! base_frame = "base_link"   # the robot's frame in /tf_static (the default)
+//! map = "maps/lab.yaml"      # for scans and ranges: the map (or [[wall]] entries)
+//!
 //! [velocity]                 # required: the input
 //! topic = "/cmd_vel"         # geometry_msgs/msg/Twist, TwistStamped or nav_msgs/msg/Odometry
 //!
@@ -14,6 +17,11 @@
 //! [truth]                    # ground truth, e.g. motion capture
 //! topic = "/mocap/pose"      # PoseStamped, PoseWithCovarianceStamped, Odometry, TransformStamped
 //!
+//! [[scan]]                   # sensor_msgs/msg/LaserScan: a beam sensor
+//! topic = "/scan"
+//! [[range]]                  # sensor_msgs/msg/Range: a one-beam sensor (IR, sonar)
+//! topic = "/ir_left"
+//!
 //! [[landmark]]               # the landmark map
 //! id = 6
 //! x = 0.588
@@ -24,9 +32,10 @@
 //! Where a path is left out, the message type's usual one is taken
 //! ([`Defaults`]); a message's time is its `header.stamp` when its type has
 //! a header, else the time the bag logged it (`stamp = ""` forces the
-//! latter). The landmarks' sensor sits where `/tf_static` puts its frame
-//! (`frame`, default the messages' `header.frame_id`) relative to
-//! `base_frame` (default `base_link`); at the robot's centre without one.
+//! latter). A sensor (the landmarks', a scan's, a range's) sits where
+//! `/tf_static` puts its frame (`frame`, default the messages'
+//! `header.frame_id`) relative to `base_frame`; at the robot's centre
+//! without one.
 
 use serde::Deserialize;
 
@@ -46,6 +55,33 @@ pub struct Mapping {
     /// The landmark map.
     #[serde(default, rename = "landmark")]
     pub landmark_map: Vec<MapEntry>,
+    /// The map the scans and ranges are corrected against (a ROS
+    /// map_server YAML, or walls as text or TOML: docs/maps.md), relative
+    /// to the mapping file.
+    pub map: Option<String>,
+    /// Walls of the map (instead of a map file), m.
+    #[serde(default, rename = "wall")]
+    pub walls: Vec<WallEntry>,
+    /// Laser scans (`sensor_msgs/msg/LaserScan`), each topic a beam sensor.
+    #[serde(default, rename = "scan")]
+    pub scans: Vec<BeamTopic>,
+    /// Single ranges (`sensor_msgs/msg/Range`: IR, sonar, a laser
+    /// rangefinder), each topic a one-beam sensor.
+    #[serde(default, rename = "range")]
+    pub ranges: Vec<BeamTopic>,
+}
+
+/// A topic of range readings: a `LaserScan` or a `Range`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BeamTopic {
+    /// The topic.
+    pub topic: String,
+    /// The sensor's frame in `/tf_static`; default the messages'
+    /// `header.frame_id`.
+    pub frame: Option<String>,
+    /// The stamp; `""` for the log time.
+    pub stamp: Option<String>,
 }
 
 fn base_link() -> String {
@@ -125,6 +161,20 @@ pub struct MapEntry {
     pub x: f64,
     /// See `x`.
     pub y: f64,
+}
+
+/// A wall segment of the map, m.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallEntry {
+    /// One end.
+    pub x1: f64,
+    /// See `x1`.
+    pub y1: f64,
+    /// The other end.
+    pub x2: f64,
+    /// See `x2`.
+    pub y2: f64,
 }
 
 /// The usual field paths of the message types a mapping's topics have.

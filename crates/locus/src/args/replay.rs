@@ -228,8 +228,31 @@ impl Source {
                 let shown = mapping_path.display().to_string();
                 let mapping =
                     locus_bag::Mapping::from_toml(&text, &shown).map_err(anyhow::Error::msg)?;
-                let log = locus_bag::convert::to_locus(file, &mapping, &shown)?;
-                (Log::from_locus(&name(file), log)?, export.as_ref(), common)
+                let mut log = locus_bag::convert::to_locus(file, &mapping, &shown)?;
+                // The map file is relative to the mapping; the log keeps
+                // the resolved path (so an export names the same file).
+                let map = mapping.map.as_ref().map(|m| {
+                    mapping_path
+                        .parent()
+                        .unwrap_or_else(|| std::path::Path::new(""))
+                        .join(m)
+                });
+                if map.is_some() && !log.walls.is_empty() {
+                    anyhow::bail!(
+                        "{shown}: give the map as `map` or as [[wall]] entries, not both"
+                    );
+                }
+                log.map = map
+                    .as_ref()
+                    .and_then(|p| p.to_str())
+                    .and_then(locus_logs::wall::MapPath::new);
+                let mut log = Log::from_locus(&name(file), log)?;
+                if let Some(map) = map {
+                    let loaded = locus_replay::log::Map::load(&map)
+                        .with_context(|| format!("reading the map {}", map.display()))?;
+                    log.map = Some(SharedMap::from(loaded));
+                }
+                (log, export.as_ref(), common)
             }
             Self::Carmen {
                 file,
