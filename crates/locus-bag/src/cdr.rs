@@ -89,7 +89,14 @@ pub fn decode(defs: &Definitions, bytes: &[u8]) -> Result<Value, CdrError> {
         budget: value_budget(bytes.len()),
         path: Vec::new(),
     };
-    d.message(&defs.root.clone(), 0)
+    d.message(&defs.root, 0)
+}
+
+/// One step of a field's path: a field's name or an element's index.
+#[derive(Clone, Copy)]
+enum Step<'a> {
+    Field(&'a str),
+    Index(usize),
 }
 
 /// The decoder's position in one message.
@@ -100,14 +107,25 @@ struct Decoder<'a> {
     pos: usize,
     little: bool,
     budget: usize,
-    /// The field path, for errors.
-    path: Vec<String>,
+    /// The field path, for errors (written out only for one).
+    path: Vec<Step<'a>>,
 }
 
-impl Decoder<'_> {
+impl<'a> Decoder<'a> {
     fn error(&self, reason: String) -> CdrError {
+        let mut field = String::new();
+        for step in &self.path {
+            match step {
+                Step::Field(name) if field.is_empty() => field.push_str(name),
+                Step::Field(name) => {
+                    field.push('.');
+                    field.push_str(name);
+                }
+                Step::Index(i) => field.push_str(&format!("[{i}]")),
+            }
+        }
         CdrError {
-            field: self.path.concat(),
+            field,
             offset: self.pos + 4,
             reason,
         }
@@ -192,7 +210,7 @@ impl Decoder<'_> {
     }
 
     /// One element of type `base`.
-    fn element(&mut self, base: &Base, depth: usize) -> Result<Value, CdrError> {
+    fn element(&mut self, base: &'a Base, depth: usize) -> Result<Value, CdrError> {
         match base {
             Base::Primitive(p) => self.primitive(*p),
             Base::String => self.string(),
@@ -201,12 +219,11 @@ impl Decoder<'_> {
                     .into(),
             )),
             Base::Message(name) => {
-                let ty = self
-                    .defs
+                let defs: &'a Definitions = self.defs;
+                let ty = defs
                     .get(name)
-                    .cloned()
                     .ok_or_else(|| self.error(format!("type {name} is not defined")))?;
-                self.message(&ty, depth + 1)
+                self.message(ty, depth + 1)
             }
         }
     }
@@ -221,7 +238,7 @@ impl Decoder<'_> {
         }
     }
 
-    fn message(&mut self, ty: &Arc<MessageType>, depth: usize) -> Result<Value, CdrError> {
+    fn message(&mut self, ty: &'a Arc<MessageType>, depth: usize) -> Result<Value, CdrError> {
         if depth > MAX_DEPTH {
             return Err(self.error(format!("message types nested deeper than {MAX_DEPTH}")));
         }
@@ -233,11 +250,7 @@ impl Decoder<'_> {
         }
         let mut fields = Vec::with_capacity(ty.fields.len());
         for f in &ty.fields {
-            self.path.push(if self.path.is_empty() {
-                f.name.to_string()
-            } else {
-                format!(".{}", f.name)
-            });
+            self.path.push(Step::Field(&f.name));
             let value = match f.shape {
                 Shape::Single => self.element(&f.base, depth)?,
                 Shape::Fixed(n) => self.list(&f.base, n, depth)?,
@@ -260,7 +273,7 @@ impl Decoder<'_> {
         }))
     }
 
-    fn list(&mut self, base: &Base, n: usize, depth: usize) -> Result<Value, CdrError> {
+    fn list(&mut self, base: &'a Base, n: usize, depth: usize) -> Result<Value, CdrError> {
         self.spend()?;
         let smallest = Self::smallest(base);
         if n.saturating_mul(smallest) > self.left() || n > self.budget {
@@ -271,7 +284,7 @@ impl Decoder<'_> {
         }
         let mut items = Vec::with_capacity(n);
         for i in 0..n {
-            self.path.push(format!("[{i}]"));
+            self.path.push(Step::Index(i));
             items.push(self.element(base, depth)?);
             self.path.pop();
         }

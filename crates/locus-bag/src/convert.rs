@@ -168,7 +168,8 @@ pub fn to_locus(path: &Path, mapping: &Mapping, mapping_file: &str) -> Result<Lo
     };
     let mut seen: HashSet<String> = HashSet::new();
     read(path, |channel, m| {
-        if seen.insert(channel.topic.clone()) {
+        if !seen.contains(&channel.topic) {
+            seen.insert(channel.topic.clone());
             g.topics.push(channel.topic.clone());
         }
         let topic = channel.topic.as_str();
@@ -389,16 +390,12 @@ fn take(
         {
             g.sensor_frame = Some(frame.to_string());
         }
-        let one;
         let sightings: &[Value] = match &l.list {
             Some(p) => f
                 .at(f.value, p)?
                 .as_list()
                 .ok_or_else(|| f.error(p, "not a list"))?,
-            None => {
-                one = [f.value.clone()];
-                &one
-            }
+            None => core::slice::from_ref(f.value),
         };
         for s in sightings {
             let id = f.number(s, &l.id)?;

@@ -661,3 +661,67 @@ fn a_killed_replay_leaves_no_log_csv_under_its_normal_name() {
     }
     let _ = fs::remove_dir_all(&dir);
 }
+
+/// A bag that is not whole (issue 30): `locus replay bag` on rosbag2's own
+/// test bag cut short, on a text file named `.mcap`, and with a mapping
+/// that is not TOML, each ends with an error naming the file and the
+/// record (or the mapping's line), never a panic.
+#[test]
+fn a_damaged_bag_or_mapping_is_an_error_naming_where() {
+    let bag = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/rosbag2_cdr_test/cdr_test_0.mcap");
+    if !bag.is_file() {
+        eprintln!("skipped: {} not found", bag.display());
+        return;
+    }
+    let dir = scratch("hostile-bag");
+    let bytes = fs::read(&bag).unwrap();
+    let cut = dir.join("cut.mcap");
+    fs::write(&cut, &bytes[..bytes.len() * 2 / 3]).unwrap();
+    let text = dir.join("text.mcap");
+    fs::write(&text, "not,a,bag\n").unwrap();
+    let mapping = dir.join("m.toml");
+    fs::write(&mapping, "[velocity]\ntopic = \"/test_topic\"\n").unwrap();
+    for (file, want) in [
+        (&cut, "cut.mcap: record "),
+        (&text, "text.mcap: record 1: "),
+    ] {
+        let out = locus(&["replay", "bag", file.to_str().unwrap(), "--list"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{err}");
+        assert!(err.contains(want) && !err.contains("panicked"), "{err}");
+    }
+    // A topic whose messages have no velocity fields: the topic and field.
+    let out = locus(&[
+        "replay",
+        "bag",
+        bag.to_str().unwrap(),
+        "--topics",
+        mapping.to_str().unwrap(),
+        "--no-plots",
+        "--out",
+        dir.join("out").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(
+            "topic /test_topic (test_msgs/msg/BasicTypes), field velocity.linear: no usual field"
+        ),
+        "{err}"
+    );
+    let bad = dir.join("bad.toml");
+    fs::write(&bad, "[velocity\ntopic = 1\n").unwrap();
+    let out = locus(&[
+        "replay",
+        "bag",
+        bag.to_str().unwrap(),
+        "--topics",
+        bad.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.toml:1:") && !err.contains("panicked"),
+        "{err}"
+    );
+    let _ = fs::remove_dir_all(&dir);
+}
