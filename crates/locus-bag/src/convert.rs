@@ -85,9 +85,17 @@ impl Fields<'_> {
             .ok_or_else(|| self.error(path, "not a number"))
     }
 
-    /// A stamp at `path` (`sec`, `nanosec`), in s.
-    fn stamp(&self, path: &str) -> Result<f64, BagError> {
-        let v = self.at(self.value, path)?;
+    /// The number `key` of `within`, the value at `prefix` (which names
+    /// the field in an error).
+    fn number_in(&self, within: &Value, prefix: &str, key: &str) -> Result<f64, BagError> {
+        within
+            .get(key)
+            .and_then(Value::as_f64)
+            .ok_or_else(|| self.error(&format!("{prefix}.{key}"), "no such number in the message"))
+    }
+
+    /// The stamp `v` (`sec`, `nanosec`) found at `path`, in s.
+    fn stamp(&self, v: &Value, path: &str) -> Result<f64, BagError> {
         let (Some(Value::Int(sec)), Some(Value::UInt(ns))) = (v.get("sec"), v.get("nanosec"))
         else {
             return Err(self.error(path, "not a builtin_interfaces/Time (sec, nanosec)"));
@@ -100,9 +108,11 @@ impl Fields<'_> {
     fn time(&self, path: Option<&str>, log_time_ns: u64) -> Result<f64, BagError> {
         match path {
             Some("") => Ok(log_seconds(log_time_ns)),
-            Some(p) => self.stamp(p),
-            None if self.value.get("header.stamp").is_some() => self.stamp("header.stamp"),
-            None => Ok(log_seconds(log_time_ns)),
+            Some(p) => self.stamp(self.at(self.value, p)?, p),
+            None => match self.value.get("header.stamp") {
+                Some(v) => self.stamp(v, "header.stamp"),
+                None => Ok(log_seconds(log_time_ns)),
+            },
         }
     }
 
@@ -460,18 +470,19 @@ fn take(
             "truth.orientation",
         )?;
         let time = f.time(t.stamp.as_deref(), m.log_time_ns)?;
-        let at = |k: &str| format!("{position}.{k}");
         let theta = if orientation.is_empty() {
             None
         } else {
-            let q = |k: &str| f.number(f.value, &format!("{orientation}.{k}"));
+            let o = f.at(f.value, orientation)?;
+            let q = |k: &str| f.number_in(o, orientation, k);
             Some(yaw([q("x")?, q("y")?, q("z")?, q("w")?]))
         };
         g.truth_has_heading = Some(theta.is_some());
+        let p = f.at(f.value, position)?;
         g.truth.push(TruthPose {
             time,
-            x: f.number(f.value, &at("x"))?,
-            y: f.number(f.value, &at("y"))?,
+            x: f.number_in(p, position, "x")?,
+            y: f.number_in(p, position, "y")?,
             theta: theta.unwrap_or(0.0),
         });
     }

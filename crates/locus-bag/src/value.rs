@@ -47,27 +47,30 @@ impl Value {
     #[must_use]
     pub fn get(&self, path: &str) -> Option<&Value> {
         let mut at = self;
-        if path.is_empty() {
-            return Some(at);
-        }
-        for step in path.split('.') {
-            let (name, mut indices) = match step.find('[') {
-                Some(i) => (&step[..i], &step[i..]),
-                None => (step, ""),
-            };
-            if !name.is_empty() {
+        let bytes = path.as_bytes();
+        let mut i = 0;
+        while i < bytes.len() {
+            // A field's name runs to the next `.` or `[`.
+            let start = i;
+            while i < bytes.len() && bytes[i] != b'.' && bytes[i] != b'[' {
+                i += 1;
+            }
+            if i > start {
                 let Value::Message(m) = at else { return None };
-                at = m.field(name)?;
+                at = m.field(&path[start..i])?;
             }
-            while let Some(rest) = indices.strip_prefix('[') {
-                let close = rest.find(']')?;
-                let i: usize = rest[..close].parse().ok()?;
+            while i < bytes.len() && bytes[i] == b'[' {
+                let close = i + path[i..].find(']')?;
+                let k: usize = path[i + 1..close].parse().ok()?;
                 let Value::List(items) = at else { return None };
-                at = items.get(i)?;
-                indices = &rest[close + 1..];
+                at = items.get(k)?;
+                i = close + 1;
             }
-            if !indices.is_empty() {
-                return None;
+            if i < bytes.len() {
+                if bytes[i] != b'.' || i + 1 == bytes.len() {
+                    return None;
+                }
+                i += 1;
             }
         }
         Some(at)
@@ -101,6 +104,46 @@ impl Value {
         match self {
             Value::List(v) => Some(v),
             _ => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::msgdef::Definitions;
+
+    #[test]
+    fn a_path_reads_fields_and_elements_and_nothing_else() {
+        let d = Definitions::parse("p/T", "P[] pts\nfloat64 s\n===\nMSG: p/P\nfloat64[2] xy\n")
+            .unwrap();
+        let p = d.get("p/P").unwrap().clone();
+        let point = |a: f64, b: f64| {
+            Value::Message(Message {
+                ty: p.clone(),
+                fields: vec![Value::List(vec![Value::Float(a), Value::Float(b)])],
+            })
+        };
+        let v = Value::Message(Message {
+            ty: d.root.clone(),
+            fields: vec![
+                Value::List(vec![point(1.0, 2.0), point(3.0, 4.0)]),
+                Value::Float(5.0),
+            ],
+        });
+        assert_eq!(v.get("s"), Some(&Value::Float(5.0)));
+        assert_eq!(v.get("pts[1].xy[0]"), Some(&Value::Float(3.0)));
+        assert_eq!(
+            v.get("pts[0].xy")
+                .and_then(Value::as_list)
+                .map(<[Value]>::len),
+            Some(2)
+        );
+        assert_eq!(v.get(""), Some(&v));
+        for bad in [
+            "s.", "pts[2]", "pts[x]", "pts[0", "pts..xy", "q", "s[0]", "pts[0]xy", "pts.xy",
+        ] {
+            assert_eq!(v.get(bad), None, "{bad}");
         }
     }
 }
