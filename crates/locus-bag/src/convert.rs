@@ -501,6 +501,25 @@ fn limits(f: &Fields<'_>, min: &str, max: &str) -> Result<(f64, f64), BagError> 
     Ok((lo, hi))
 }
 
+/// Beam sensor `id` at the robot's centre (until its mount is known):
+/// `count` beams from `angle_0` by `angle_step` (rad), ranges within
+/// `limits` (m).
+fn centred(id: u32, limits: (f64, f64), angle_0: f64, angle_step: f64, count: u32) -> BeamSensor {
+    BeamSensor {
+        id,
+        mount: SensorMount {
+            x: 0.0,
+            y: 0.0,
+            yaw: 0.0,
+        },
+        min_range: limits.0,
+        max_range: limits.1,
+        angle_0,
+        angle_step,
+        count,
+    }
+}
+
 /// A `sensor_msgs/msg/LaserScan` as beam sensor `id` (at the robot's
 /// centre until its mount is known) and its ranges.
 fn scan(f: &Fields<'_>, id: u32) -> Result<(BeamSensor, Vec<f64>), BagError> {
@@ -518,19 +537,13 @@ fn scan(f: &Fields<'_>, id: u32) -> Result<(BeamSensor, Vec<f64>), BagError> {
                 format!("{} ranges: need 1 to {MAX_BEAMS}", ranges.len()),
             )
         })?;
-    let sensor = BeamSensor {
+    let sensor = centred(
         id,
-        mount: SensorMount {
-            x: 0.0,
-            y: 0.0,
-            yaw: 0.0,
-        },
-        min_range,
-        max_range,
-        angle_0: f.number(f.value, "angle_min")?,
-        angle_step: f.number(f.value, "angle_increment")?,
+        (min_range, max_range),
+        f.number(f.value, "angle_min")?,
+        f.number(f.value, "angle_increment")?,
         count,
-    };
+    );
     let values = ranges
         .iter()
         .map(|r| r.as_f64().ok_or_else(|| f.error("ranges", "not numbers")))
@@ -541,19 +554,7 @@ fn scan(f: &Fields<'_>, id: u32) -> Result<(BeamSensor, Vec<f64>), BagError> {
 /// A `sensor_msgs/msg/Range` as one-beam sensor `id` and its range.
 fn range(f: &Fields<'_>, id: u32) -> Result<(BeamSensor, Vec<f64>), BagError> {
     let (min_range, max_range) = limits(f, "min_range", "max_range")?;
-    let sensor = BeamSensor {
-        id,
-        mount: SensorMount {
-            x: 0.0,
-            y: 0.0,
-            yaw: 0.0,
-        },
-        min_range,
-        max_range,
-        angle_0: 0.0,
-        angle_step: 0.0,
-        count: 1,
-    };
+    let sensor = centred(id, (min_range, max_range), 0.0, 0.0, 1);
     Ok((sensor, vec![f.number(f.value, "range")?]))
 }
 

@@ -145,6 +145,38 @@ fn replay(dir: &Path, args: &[&str], out: &str) -> String {
     common::locus_ok(&all)
 }
 
+/// Replays the bag `bag` with its `mapping` and the CSV log `csv` alike
+/// (with `flags`, to `dir/NAME-bag` and `dir/NAME-csv`) and asserts their
+/// estimates agree to 1e-9.
+fn bag_as_its_csv(
+    dir: &Path,
+    (bag, mapping, csv): (&Path, &Path, &Path),
+    flags: &[&str],
+    name: &str,
+) {
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let (bag, mapping, csv) = (s(bag), s(mapping), s(csv));
+    let (to_bag, to_csv) = (format!("{name}-bag"), format!("{name}-csv"));
+    let said = replay(
+        dir,
+        &[
+            &["bag", bag.as_str(), "--topics", mapping.as_str()][..],
+            flags,
+        ]
+        .concat(),
+        &to_bag,
+    );
+    assert!(said.contains("scans / beams in them"), "{said}");
+    replay(dir, &[&["csv", csv.as_str()][..], flags].concat(), &to_csv);
+    let d = differences(
+        &dir.join(to_bag).join("log.csv"),
+        &dir.join(to_csv).join("log.csv"),
+        &ESTIMATES,
+    );
+    println!("{name}: largest differences {ESTIMATES:?}: {d:?}");
+    assert!(d.iter().all(|&v| v <= 1e-9), "{d:?}");
+}
+
 #[test]
 fn bags_of_ranges_and_of_scans_replay_as_their_csv() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
@@ -192,29 +224,7 @@ fn bags_of_ranges_and_of_scans_replay_as_their_csv() {
         "--start",
         "0.9844566829712001,0,0",
     ];
-    let (bag, mapping, csv_path) = (s(&bag), s(&mapping), s(&csv));
-    let said = replay(
-        &dir,
-        &[
-            &["bag", bag.as_str(), "--topics", mapping.as_str()][..],
-            &flags,
-        ]
-        .concat(),
-        "wall-bag",
-    );
-    assert!(said.contains("scans / beams in them"), "{said}");
-    replay(
-        &dir,
-        &[&["csv", csv_path.as_str()][..], &flags].concat(),
-        "wall-csv",
-    );
-    let d = differences(
-        &dir.join("wall-bag/log.csv"),
-        &dir.join("wall-csv/log.csv"),
-        &ESTIMATES,
-    );
-    println!("largest differences {ESTIMATES:?}: {d:?}");
-    assert!(d.iter().all(|&v| v <= 1e-9), "{d:?}");
+    bag_as_its_csv(&dir, (&bag, &mapping, &csv), &flags, "wall");
 
     // The Intel lab's scans as sensor_msgs/msg/LaserScan, against its map.
     let map_dir = dir.join("intel-map");
@@ -258,29 +268,7 @@ fn bags_of_ranges_and_of_scans_replay_as_their_csv() {
     let csv = dir.join("intel.csv");
     std::fs::write(&csv, format!("map,{map}\n{text}")).unwrap();
     let (bag, mapping) = to_bag(&csv);
-    let (bag, mapping, csv_path) = (s(&bag), s(&mapping), s(&csv));
-    let said = replay(
-        &dir,
-        &[
-            &["bag", bag.as_str(), "--topics", mapping.as_str()][..],
-            &noise,
-        ]
-        .concat(),
-        "intel-bag",
-    );
-    assert!(said.contains("910 / 163800"), "{said}");
-    replay(
-        &dir,
-        &[&["csv", csv_path.as_str()][..], &noise].concat(),
-        "intel-csv",
-    );
-    let d = differences(
-        &dir.join("intel-bag/log.csv"),
-        &dir.join("intel-csv/log.csv"),
-        &ESTIMATES,
-    );
-    println!("largest differences {ESTIMATES:?}: {d:?}");
-    assert!(d.iter().all(|&v| v <= 1e-9), "{d:?}");
+    bag_as_its_csv(&dir, (&bag, &mapping, &csv), &noise, "intel");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
