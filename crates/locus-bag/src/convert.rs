@@ -15,10 +15,11 @@ use locus_logs::beam_sensor::{MAX_BEAMS, MAX_RANGE_LIMIT};
 use locus_logs::locus_csv::{LandmarkMeasurement, LocusLog, MapLandmark};
 use locus_logs::mrclam::{Groundtruth, Odometry, TruthPose};
 use locus_logs::scans::Scans;
+use locus_logs::se2::{Pose, compose};
 use locus_logs::sensor::SensorMount;
 use locus_logs::wall::{MapPath, Wall};
 
-use crate::bag::{Channel, RawMessage, read};
+use crate::bag::{Channel, RawMessage, Topic, read};
 use crate::error::{BagError, FieldProblem};
 use crate::mapping::{Defaults, Mapping};
 use crate::value::Value;
@@ -41,14 +42,6 @@ fn log_seconds(ns: u64) -> f64 {
 /// The yaw of a quaternion `[x, y, z, w]`, rad.
 fn yaw([x, y, z, w]: [f64; 4]) -> f64 {
     (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
-}
-
-/// One planar transform: `child` in `parent`'s frame.
-#[derive(Debug, Clone, Copy)]
-struct Planar {
-    x: f64,
-    y: f64,
-    yaw: f64,
 }
 
 /// Reads fields of one message, naming the topic, type and field on error.
@@ -143,7 +136,7 @@ struct Gathered {
     measurements: Vec<LandmarkMeasurement>,
     truth: Vec<TruthPose>,
     /// Static transforms by child frame: (parent, transform).
-    tf: HashMap<String, (String, Planar)>,
+    tf: HashMap<String, (String, Pose)>,
     /// The landmark messages' frame, as they name it.
     sensor_frame: Option<String>,
     truth_has_heading: Option<bool>,
@@ -247,9 +240,9 @@ pub fn to_locus(path: &Path, mapping: &Mapping, mapping_file: &str) -> Result<Lo
         if !frame.is_empty() && *frame != mapping.base_frame {
             let p = mount(&g.tf, &mapping.base_frame, frame).ok_or_else(|| no_frame(frame))?;
             sensor.mount = SensorMount {
-                x: p.x,
-                y: p.y,
-                yaw: p.yaw,
+                x: p[0],
+                y: p[1],
+                yaw: p[2],
             };
         }
         beam_sensors.push(sensor);
@@ -270,9 +263,9 @@ pub fn to_locus(path: &Path, mapping: &Mapping, mapping_file: &str) -> Result<Lo
         Some(frame) if frame != mapping.base_frame && !frame.is_empty() => {
             let p = mount(&g.tf, &mapping.base_frame, &frame).ok_or_else(|| no_frame(&frame))?;
             Some(SensorMount {
-                x: p.x,
-                y: p.y,
-                yaw: p.yaw,
+                x: p[0],
+                y: p[1],
+                yaw: p[2],
             })
         }
         _ => None,
@@ -318,25 +311,17 @@ pub fn to_locus(path: &Path, mapping: &Mapping, mapping_file: &str) -> Result<Lo
     })
 }
 
-/// The transform of `frame` in `base`, composed through `tf`'s parents.
-fn mount(tf: &HashMap<String, (String, Planar)>, base: &str, frame: &str) -> Option<Planar> {
-    let mut at = Planar {
-        x: 0.0,
-        y: 0.0,
-        yaw: 0.0,
-    };
+/// The pose `[x, y, yaw]` of `frame` in `base`, composed through `tf`'s
+/// parents (`child` in its parent's frame, by child).
+fn mount(tf: &HashMap<String, (String, Pose)>, base: &str, frame: &str) -> Option<Pose> {
+    let mut at = [0.0; 3];
     let mut child = frame;
     for _ in 0..32 {
         if child == base {
             return Some(at);
         }
         let (parent, p) = tf.get(child)?;
-        let (s, c) = p.yaw.sin_cos();
-        at = Planar {
-            x: p.x + c * at.x - s * at.y,
-            y: p.y + s * at.x + c * at.y,
-            yaw: locus_core::wrap_angle(p.yaw + at.yaw),
-        };
+        at = compose(*p, at);
         child = parent;
     }
     None
@@ -366,11 +351,11 @@ fn take(
                 text("child_frame_id")?,
                 (
                     text("header.frame_id")?,
-                    Planar {
-                        x: f.number(t, "transform.translation.x")?,
-                        y: f.number(t, "transform.translation.y")?,
-                        yaw: yaw([q("x")?, q("y")?, q("z")?, q("w")?]),
-                    },
+                    [
+                        f.number(t, "transform.translation.x")?,
+                        f.number(t, "transform.translation.y")?,
+                        yaw([q("x")?, q("y")?, q("z")?, q("w")?]),
+                    ],
                 ),
             );
         }
@@ -558,50 +543,53 @@ fn range(f: &Fields<'_>, id: u32) -> Result<(BeamSensor, Vec<f64>), BagError> {
     Ok((sensor, vec![f.number(f.value, "range")?]))
 }
 
-/// A proposed mapping for the topics `topics` (name, type) of a bag: the
-/// first velocity-like topic, the first pose-like topic whose name says
-/// truth (`mocap`, `truth`, `ground`, `vicon`), and the first topic of a
-/// type with `id` and `range` fields (`fields` of a type, if known).
+/// A proposed mapping for the decodable `topics` of a bag ([`topics`]):
+/// the first velocity-like topic, the first pose-like topic whose name
+/// says truth (`mocap`, `truth`, `ground`, `vicon`, `optitrack`), each
+/// `LaserScan` and `Range` topic (with an empty `map`), and the first topic
+/// of a type with `id` and `range` fields as the landmark sightings.
+///
+/// [`topics`]: crate::topics
 #[must_use]
-pub fn propose(topics: &[(String, String)], fields: &dyn Fn(&str) -> Vec<String>) -> String {
+pub fn propose(topics: &[Topic]) -> String {
+    let decodable: Vec<&Topic> = topics.iter().filter(|t| t.undecodable.is_none()).collect();
+    let find = |pick: &dyn Fn(&Topic) -> bool| decodable.iter().copied().find(|t| pick(t));
     let mut out = String::new();
-    let velocity = topics
-        .iter()
-        .find(|(_, ty)| ty.ends_with("/Twist") || ty.ends_with("/TwistStamped"))
-        .or_else(|| {
-            topics
-                .iter()
-                .find(|(_, ty)| Defaults::velocity(ty).is_some())
-        });
+    let velocity =
+        find(&|t| t.type_name.ends_with("/Twist") || t.type_name.ends_with("/TwistStamped"))
+            .or_else(|| find(&|t| Defaults::velocity(&t.type_name).is_some()));
     match velocity {
-        Some((t, ty)) => out.push_str(&format!("[velocity]\ntopic = \"{t}\"  # {ty}\n")),
+        Some(t) => out.push_str(&format!("[velocity]\ntopic = \"{}\"  # {}\n", t.topic, t.type_name)),
         None => out.push_str("# no velocity topic found (Twist, TwistStamped or Odometry): set one\n[velocity]\ntopic = \"\"\n"),
     }
     let truthy = ["mocap", "truth", "ground", "vicon", "optitrack"];
-    if let Some((t, ty)) = topics.iter().find(|(t, ty)| {
-        Defaults::pose(ty).is_some() && truthy.iter().any(|w| t.to_lowercase().contains(w))
-    }) {
-        out.push_str(&format!("\n[truth]\ntopic = \"{t}\"  # {ty}\n"));
-    }
-    for (t, ty) in topics {
-        match ty.as_str() {
-            "sensor_msgs/msg/LaserScan" => out.push_str(&format!("\n[[scan]]\ntopic = \"{t}\"\n")),
-            "sensor_msgs/msg/Range" => out.push_str(&format!("\n[[range]]\ntopic = \"{t}\"\n")),
-            _ => {}
-        }
-    }
-    if topics
-        .iter()
-        .any(|(_, ty)| ty == "sensor_msgs/msg/LaserScan" || ty == "sensor_msgs/msg/Range")
-    {
-        out.insert_str(0, "map = \"\"  # the map the ranges are corrected against (docs/maps.md), relative to this file\n\n");
-    }
-    if let Some((t, ty)) = topics.iter().find(|(_, ty)| {
-        let f = fields(ty);
-        f.iter().any(|x| x == "id") && f.iter().any(|x| x == "range")
+    if let Some(t) = find(&|t| {
+        Defaults::pose(&t.type_name).is_some()
+            && truthy.iter().any(|w| t.topic.to_lowercase().contains(w))
     }) {
         out.push_str(&format!(
-            "\n[landmarks]\ntopic = \"{t}\"  # {ty}\n\n# the landmark map: one entry per landmark\n# [[landmark]]\n# id = 1\n# x = 0.0\n# y = 0.0\n"
+            "\n[truth]\ntopic = \"{}\"  # {}\n",
+            t.topic, t.type_name
+        ));
+    }
+    let mut beams = false;
+    for t in &decodable {
+        let table = match t.type_name.as_str() {
+            "sensor_msgs/msg/LaserScan" => "[[scan]]",
+            "sensor_msgs/msg/Range" => "[[range]]",
+            _ => continue,
+        };
+        beams = true;
+        out.push_str(&format!("\n{table}\ntopic = \"{}\"\n", t.topic));
+    }
+    if beams {
+        out.insert_str(0, "map = \"\"  # the map the ranges are corrected against (docs/maps.md), relative to this file\n\n");
+    }
+    let has = |t: &Topic, name: &str| t.fields.iter().any(|f| f == name);
+    if let Some(t) = find(&|t| has(t, "id") && has(t, "range")) {
+        out.push_str(&format!(
+            "\n[landmarks]\ntopic = \"{}\"  # {}\n\n# the landmark map: one entry per landmark\n# [[landmark]]\n# id = 1\n# x = 0.0\n# y = 0.0\n",
+            t.topic, t.type_name
         ));
     }
     out
@@ -621,32 +609,18 @@ mod tests {
         let half_pi = core::f64::consts::FRAC_PI_2;
         tf.insert(
             "arm".to_string(),
-            (
-                "base_link".to_string(),
-                Planar {
-                    x: 1.0,
-                    y: 0.0,
-                    yaw: yaw(q(half_pi)),
-                },
-            ),
+            ("base_link".to_string(), [1.0, 0.0, yaw(q(half_pi))]),
         );
         tf.insert(
             "camera".to_string(),
-            (
-                "arm".to_string(),
-                Planar {
-                    x: 0.5,
-                    y: 0.0,
-                    yaw: yaw(q(half_pi)),
-                },
-            ),
+            ("arm".to_string(), [0.5, 0.0, yaw(q(half_pi))]),
         );
         let m = mount(&tf, "base_link", "camera").unwrap();
         assert!(
-            (m.x - 1.0).abs() < 1e-15 && (m.y - 0.5).abs() < 1e-15,
+            (m[0] - 1.0).abs() < 1e-15 && (m[1] - 0.5).abs() < 1e-15,
             "{m:?}"
         );
-        assert!((m.yaw.abs() - core::f64::consts::PI).abs() < 1e-15, "{m:?}");
+        assert!((m[2].abs() - core::f64::consts::PI).abs() < 1e-15, "{m:?}");
         assert!(mount(&tf, "odom", "camera").is_none());
         // A loop in the transforms ends.
         tf.insert("base_link".to_string(), ("camera".to_string(), tf["arm"].1));

@@ -248,9 +248,7 @@ impl Source {
                     .and_then(locus_logs::wall::MapPath::new);
                 let mut log = Log::from_locus(&name(file), log)?;
                 if let Some(map) = map {
-                    let loaded = locus_replay::log::Map::load(&map)
-                        .with_context(|| format!("reading the map {}", map.display()))?;
-                    log.map = Some(SharedMap::from(loaded));
+                    log.map = Some(load_map(&map)?);
                 }
                 (log, export.as_ref(), common)
             }
@@ -267,13 +265,18 @@ impl Source {
                     *reference = Some(Reference::carmen(&read, path, *relations_offset)?);
                 }
                 let mut log = Log::from_locus(&name(file), read.log)?;
-                let loaded = locus_replay::log::Map::load(map)
-                    .with_context(|| format!("reading the map {}", map.display()))?;
-                log.map = Some(SharedMap::from(loaded));
+                log.map = Some(load_map(map)?);
                 (log, export.as_ref(), common)
             }
         })
     }
+}
+
+/// The map file at `path` (ROS map_server YAML, or walls as text or TOML).
+fn load_map(path: &std::path::Path) -> anyhow::Result<SharedMap> {
+    let loaded = locus_replay::log::Map::load(path)
+        .with_context(|| format!("reading the map {}", path.display()))?;
+    Ok(SharedMap::from(loaded))
 }
 
 /// The replay's options, the same for every source.

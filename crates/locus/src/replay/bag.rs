@@ -37,22 +37,11 @@ pub fn list(file: &Path) -> Result<String> {
                 .map_or_else(|| "yes".to_string(), |why| format!("no: {why}")),
         ]);
     }
-    let named: Vec<(String, String)> = topics
-        .iter()
-        .filter(|t| t.undecodable.is_none())
-        .map(|t| (t.topic.clone(), t.type_name.clone()))
-        .collect();
-    let fields = |ty: &str| {
-        topics
-            .iter()
-            .find(|t| t.type_name == ty)
-            .map_or_else(Vec::new, |t| t.fields.clone())
-    };
     let messages: u64 = topics.iter().map(|t| t.count).sum();
     Ok(format!(
         "{}: {} topics, {messages} messages\n{t}\n\nA mapping to start from (save it, complete it, and pass it with --topics; docs/bags.md):\n\n{}",
         file.display(),
         topics.len(),
-        locus_bag::convert::propose(&named, &fields)
+        locus_bag::convert::propose(&topics)
     ))
 }
