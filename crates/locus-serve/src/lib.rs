@@ -32,6 +32,7 @@
 
 extern crate alloc;
 
+pub mod foxglove;
 pub mod params;
 pub mod presets;
 pub mod protocol;

@@ -41,6 +41,12 @@ pub struct Args {
     /// Print every applied packet's estimate (robot time, x, y, theta).
     #[arg(long)]
     verbose: bool,
+    /// Also serve the live estimate to Foxglove over its WebSocket
+    /// protocol at this address (e.g. 127.0.0.1:8765; port 0 picks a free
+    /// one, printed first): in Foxglove, Open connection, Foxglove
+    /// WebSocket, `ws://ADDR`. docs/foxglove.md.
+    #[arg(long, value_name = "ADDR")]
+    foxglove: Option<core::net::SocketAddr>,
 }
 
 /// The robot's UDP address from `--robot` (`HOST:PORT` or
@@ -58,7 +64,21 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let square = square_config(&args.scenario)?;
     let cfg = host_config(&square);
     let verbose = args.verbose;
+    let live = match args.foxglove {
+        Some(addr) => {
+            let live = locus_serve::foxglove::Live::start(addr, crate::plot::ELLIPSE_SIGMA)
+                .with_context(|| format!("--foxglove {addr}"))?;
+            live.latch(&locus_serve::foxglove::arena(&cfg), 0.0)?;
+            println!("Foxglove WebSocket on ws://{}/", live.local_addr());
+            std::io::Write::flush(&mut std::io::stdout())?;
+            Some(live)
+        }
+        None => None,
+    };
     let mut on_step = |s: &HostStep| {
+        if let Some(live) = &live {
+            live.publish(&locus_serve::foxglove::frame_of(s));
+        }
         if verbose {
             println!(
                 "{:.2} s  x {:.4} m  y {:.4} m  theta {:.4} rad{}",

@@ -8,6 +8,7 @@ mod demo;
 mod doa;
 mod family;
 mod font;
+mod foxglove;
 mod guide;
 mod host;
 mod hw;

@@ -42,6 +42,12 @@ pub struct Args {
     /// up" to a serial line).
     #[arg(long, default_value_t = 115_200, value_parser = crate::args::baud)]
     baud: u32,
+    /// Also serve the robot's live estimate to Foxglove over its WebSocket
+    /// protocol at this address (with `--robot`; e.g. 127.0.0.1:8765, port
+    /// 0 picks a free one): in Foxglove, Open connection, Foxglove
+    /// WebSocket, `ws://ADDR`. docs/foxglove.md.
+    #[arg(long, value_name = "ADDR", requires = "robot")]
+    foxglove: Option<SocketAddr>,
 }
 
 /// The square-kind configuration of `arg` (a built-in or a file) and its
@@ -73,12 +79,17 @@ pub fn run(args: &Args) -> Result<()> {
             let mut host = locus_simlink::host_config(&cfg);
             // A live session: the path repeats until the page stops it.
             host.laps = usize::MAX;
-            Some(locus_serve::robot::Attached::start(
-                link,
-                &host,
-                cfg.dt,
-                config.tick,
-            )?)
+            let live = args
+                .foxglove
+                .map(|addr| {
+                    locus_serve::foxglove::Live::start(addr, crate::plot::ELLIPSE_SIGMA)
+                        .with_context(|| format!("--foxglove {addr}"))
+                })
+                .transpose()?;
+            let foxglove = live.as_ref().map(locus_serve::foxglove::Live::local_addr);
+            let attached =
+                locus_serve::robot::Attached::start_with(link, &host, cfg.dt, config.tick, live)?;
+            Some((attached, foxglove))
         }
     };
     let runtime = tokio::runtime::Builder::new_multi_thread()
@@ -90,11 +101,16 @@ pub fn run(args: &Args) -> Result<()> {
             .await
             .with_context(|| format!("binding {}", args.addr))?;
         let addr = listener.local_addr()?;
-        match &args.robot {
-            Some(robot) => println!(
-                "Locus teaching UI on http://{addr}/ attached to the robot at {robot} (its filter and controller from {name}; stopped until Start); Ctrl-C stops it"
-            ),
-            None => println!(
+        match (&args.robot, &robot) {
+            (Some(robot), Some((_, foxglove))) => {
+                println!(
+                    "Locus teaching UI on http://{addr}/ attached to the robot at {robot} (its filter and controller from {name}; stopped until Start); Ctrl-C stops it"
+                );
+                if let Some(f) = foxglove {
+                    println!("Foxglove WebSocket on ws://{f}/ (the robot's live estimate)");
+                }
+            }
+            _ => println!(
                 "Locus teaching UI on http://{addr}/ (scenario {name}, seed {}); Ctrl-C stops it",
                 args.seed
             ),
@@ -106,7 +122,7 @@ pub fn run(args: &Args) -> Result<()> {
             );
         }
         match robot {
-            Some(robot) => locus_serve::serve_with_robot(listener, config, robot).await?,
+            Some((robot, _)) => locus_serve::serve_with_robot(listener, config, robot).await?,
             None => locus_serve::serve(listener, config).await?,
         }
         Ok(())

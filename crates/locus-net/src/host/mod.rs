@@ -72,6 +72,8 @@ pub struct HostStep {
     pub estimate: [f64; 3],
     /// EKF covariance diagonal (m^2, m^2, rad^2).
     pub variance: [f64; 3],
+    /// EKF covariance of `[x, y, theta]` (m^2, m rad, rad^2).
+    pub covariance: [[f64; 3]; 3],
     /// IR reading `[d_s1, d_s2]` (m), if any.
     pub ir: Option<[f32; 2]>,
     /// Whether an IR correction was applied (associated and gated in).
@@ -423,6 +425,7 @@ impl Host {
             },
             estimate: [x[0], x[1], x[2]],
             variance: [p[(0, 0)], p[(1, 1)], p[(2, 2)]],
+            covariance: core::array::from_fn(|i| core::array::from_fn(|j| p[(i, j)])),
             ir: t.ir,
             corrected,
             nis: tried.map(|(nis, _)| nis),

@@ -145,6 +145,25 @@ impl Attached {
     /// [`Error::Link`] if `cfg` is invalid; [`Error::Io`] if the thread
     /// cannot be started.
     pub fn start(link: Link, cfg: &HostConfig, dt: f64, tick: Duration) -> Result<Self, Error> {
+        Self::start_with(link, cfg, dt, tick, None)
+    }
+
+    /// As [`Attached::start`], also publishing every applied packet to the
+    /// Foxglove server `foxglove` (its map latched to the arena's walls).
+    ///
+    /// # Errors
+    /// As [`Attached::start`].
+    pub fn start_with(
+        link: Link,
+        cfg: &HostConfig,
+        dt: f64,
+        tick: Duration,
+        foxglove: Option<crate::foxglove::Live>,
+    ) -> Result<Self, Error> {
+        if let Some(live) = &foxglove {
+            // Time 0 is always a Foxglove time.
+            let _ = live.latch(&crate::foxglove::arena(cfg), 0.0);
+        }
         let mut probe = Host::new(cfg)?;
         probe.set_stopped(true);
         let (commands, inbox) = mpsc::channel();
@@ -167,6 +186,7 @@ impl Attached {
             last: None,
             due: true,
             capture: None,
+            foxglove,
         };
         let state = publisher.state(&probe, None, None);
         publisher.lock().state = state;

@@ -65,6 +65,8 @@ pub(super) struct Publisher {
     /// A page asked for the next correction: the host's count of tried
     /// corrections and the host time (s) when it asked.
     pub(super) capture: Option<(u64, f64)>,
+    /// The Foxglove server fed with every applied packet, if any.
+    pub(super) foxglove: Option<crate::foxglove::Live>,
 }
 
 impl Publisher {
@@ -93,6 +95,9 @@ impl Publisher {
             }
         }
         if let Some(step) = tick.step {
+            if let Some(live) = &self.foxglove {
+                live.publish(&crate::foxglove::frame_of(&step));
+            }
             let p = host.belief().p;
             self.time = step.robot_time;
             self.pending.push(Sample {

@@ -416,6 +416,9 @@ pub struct Flags {
     /// Pictures.
     #[command(flatten)]
     pub pictures: PictureArgs,
+    /// Foxglove output.
+    #[command(flatten)]
+    pub foxglove: crate::foxglove::McapArgs,
 }
 
 impl Flags {

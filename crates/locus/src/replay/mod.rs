@@ -131,7 +131,22 @@ fn execute(
     let mut samples: Vec<Sample> = Vec::new();
     let mut at_scans = reference.map(relations::Reference::gather);
     let smoothed = cfg.smooth.then_some(smoothed_path.as_path());
+    let mut recorder = match &flags.foxglove.mcap {
+        Some(path) => {
+            let scene =
+                crate::foxglove::scene(Vec::new(), &log.landmarks, log.map.as_ref().map(|m| &*m.0));
+            Some(crate::foxglove::Recorder::create(
+                path,
+                scene,
+                flags.pictures.ellipse_sigma,
+            )?)
+        }
+        None => None,
+    };
     let report = replay_to_csv(log, cfg, &csv_path, smoothed, |step| {
+        if let Some(rec) = &mut recorder {
+            rec.push(&crate::foxglove::frame_of_step(step));
+        }
         if step.index % 4096 == 0 {
             bar.set_position(step.index as u64);
         }
@@ -218,9 +233,15 @@ fn execute(
         text.push_str(&format!("{table}\n"));
     }
     text.push_str(&report.refusals.listing(&log.name));
+    let mcap = recorder
+        .map(|rec| rec.finish(&text, "locus replay"))
+        .transpose()?;
     text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
     if cfg.smooth {
         text.push_str(&format!("smoothed: {}\n", smoothed_path.display()));
+    }
+    if let Some(w) = &mcap {
+        text.push_str(&crate::foxglove::written(w));
     }
     print_out(&text)
 }

@@ -87,6 +87,9 @@ pub struct RunArgs {
     /// Pictures of a single run.
     #[command(flatten)]
     pictures: PictureArgs,
+    /// Foxglove output of a single run.
+    #[command(flatten)]
+    foxglove: crate::foxglove::McapArgs,
 }
 
 /// Simulated-time limit per lap when `--laps` is given (s).
@@ -353,8 +356,29 @@ where
     // midway leaves only its own partial outputs.
     crate::output::prepare_run_dir(out)?;
     if args.runs > 1 {
+        anyhow::ensure!(
+            args.foxglove.mcap.is_none(),
+            "--mcap writes a single run: leave out --runs {} or --mcap",
+            args.runs
+        );
         return monte_carlo::monte_carlo(args, info, out, runner);
     }
+    let mut recorder = match &args.foxglove.mcap {
+        Some(path) => {
+            let walls = info
+                .walls
+                .iter()
+                .map(|w| [w.a[0], w.a[1], w.b[0], w.b[1]])
+                .collect();
+            let scene = crate::foxglove::scene(walls, &[], None);
+            Some(crate::foxglove::Recorder::create(
+                path,
+                scene,
+                args.pictures.ellipse_sigma,
+            )?)
+        }
+        None => None,
+    };
     let csv_path = out.join("log.csv");
     let file =
         File::create(&csv_path).with_context(|| format!("creating {}", csv_path.display()))?;
@@ -368,8 +392,14 @@ where
     let mut samples: Vec<Sample> = Vec::new();
     let mut sink = |r: &R| {
         steps += 1;
-        if !args.pictures.no_plots {
-            samples.push(r.sample());
+        if !args.pictures.no_plots || recorder.is_some() {
+            let sample = r.sample();
+            if let Some(rec) = &mut recorder {
+                rec.push(&crate::foxglove::frame_of_sample(&sample));
+            }
+            if !args.pictures.no_plots {
+                samples.push(sample);
+            }
         }
         if io_error.is_some() {
             return;
@@ -422,7 +452,13 @@ where
     };
 
     let mut text = summary_text(args, info, &summary);
-    text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
+    if let Some(rec) = recorder {
+        let written = rec.finish(&text, "locus run")?;
+        text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
+        text.push_str(&crate::foxglove::written(&written));
+    } else {
+        text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
+    }
     print_out(&text)
 }
 
