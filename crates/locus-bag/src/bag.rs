@@ -47,6 +47,22 @@ impl Channel {
     /// message does not decode; the error names the file, the record and
     /// the field.
     pub fn decode(&self, file: &Path, message: &RawMessage<'_>) -> Result<Value, BagError> {
+        let mut value = Value::Bool(false);
+        self.decode_into(file, message, &mut value)?;
+        Ok(value)
+    }
+
+    /// As [`Channel::decode`], into `out`, reusing what it holds from an
+    /// earlier message of this channel ([`crate::cdr::decode_into`]).
+    ///
+    /// # Errors
+    /// As [`Channel::decode`].
+    pub fn decode_into(
+        &self,
+        file: &Path,
+        message: &RawMessage<'_>,
+        out: &mut Value,
+    ) -> Result<(), BagError> {
         let defs = self
             .definitions
             .as_ref()
@@ -55,7 +71,7 @@ impl Channel {
                 topic: self.topic.clone(),
                 reason: reason.clone(),
             })?;
-        crate::cdr::decode(defs, message.data).map_err(|source| BagError::Message {
+        crate::cdr::decode_into(defs, message.data, out).map_err(|source| BagError::Message {
             file: file.to_path_buf(),
             record: message.record,
             topic: self.topic.clone(),
@@ -128,7 +144,8 @@ pub fn read(
         .with_record_length_limit(RECORD_LIMIT);
     let mut reader = LinearReader::new_with_options(options);
     let mut schemas: HashMap<u16, (String, String, Vec<u8>)> = HashMap::new();
-    let mut channels: HashMap<u16, Channel> = HashMap::new();
+    // By id: a message's channel is looked up once per message.
+    let mut channels: Vec<Option<Channel>> = Vec::new();
     let mut record = 0u64;
     let container = |record: u64, reason: String| BagError::Container {
         file: PathBuf::from(path),
@@ -158,20 +175,24 @@ pub fn read(
                             .map(|(n, e, _)| (n.clone(), e.clone()))
                             .unwrap_or_default();
                         let definitions = decodable(&c.message_encoding, schema);
-                        channels.insert(
-                            c.id,
-                            Channel {
-                                id: c.id,
-                                topic: c.topic,
-                                type_name,
-                                message_encoding: c.message_encoding,
-                                schema_encoding,
-                                definitions,
-                            },
-                        );
+                        let slot = usize::from(c.id);
+                        if channels.len() <= slot {
+                            channels.resize_with(slot + 1, || None);
+                        }
+                        channels[slot] = Some(Channel {
+                            id: c.id,
+                            topic: c.topic,
+                            type_name,
+                            message_encoding: c.message_encoding,
+                            schema_encoding,
+                            definitions,
+                        });
                     }
                     Record::Message { header, data } => {
-                        let Some(channel) = channels.get(&header.channel_id) else {
+                        let Some(channel) = channels
+                            .get(usize::from(header.channel_id))
+                            .and_then(Option::as_ref)
+                        else {
                             return Err(container(
                                 record,
                                 format!(

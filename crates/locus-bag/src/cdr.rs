@@ -56,63 +56,100 @@ fn representation(kind: u16) -> &'static str {
 /// that is not UTF-8; a `wstring`; nesting beyond [`MAX_DEPTH`]. The error
 /// names the field's path and the byte offset.
 pub fn decode(defs: &Definitions, bytes: &[u8]) -> Result<Value, CdrError> {
-    let Some(header) = bytes.get(..4) else {
-        return Err(CdrError {
-            field: String::new(),
-            offset: 0,
-            reason: format!(
-                "{} bytes: shorter than the 4-byte encapsulation header",
-                bytes.len()
-            ),
-        });
-    };
-    let kind = u16::from_be_bytes([header[0], header[1]]);
-    let little = match kind {
-        0x0000 => false,
-        0x0001 => true,
-        _ => {
-            return Err(CdrError {
-                field: String::new(),
-                offset: 0,
-                reason: format!(
-                    "encapsulation {kind:#06x} ({}) is not plain CDR (0x0000 or 0x0001)",
-                    representation(kind)
-                ),
-            });
-        }
-    };
-    let mut d = Decoder {
-        defs,
-        data: &bytes[4..],
-        pos: 0,
-        little,
-        budget: value_budget(bytes.len()),
-        path: Vec::new(),
-    };
-    d.message(&defs.root, 0)
+    let mut value = Value::Bool(false);
+    decode_into(defs, bytes, &mut value)?;
+    Ok(value)
+}
+
+/// As [`decode`], into `out`: the strings, lists and messages `out` holds
+/// from an earlier message of the same type are reused, so a channel's
+/// messages decode with no allocation once the first has. On an error,
+/// `out` holds part of the message.
+///
+/// # Errors
+/// As [`decode`].
+pub fn decode_into(defs: &Definitions, bytes: &[u8], out: &mut Value) -> Result<(), CdrError> {
+    let mut d = Decoder::new(defs, bytes)?;
+    d.message(&defs.root, 0, out)
+}
+
+impl CdrError {
+    /// The error inside `step` of its path: the step written before the
+    /// field named so far.
+    pub(crate) fn within(mut self, step: Step<'_>) -> Self {
+        let head = match step {
+            Step::Field(name) if self.field.is_empty() || self.field.starts_with('[') => {
+                name.to_string()
+            }
+            Step::Field(name) => format!("{name}."),
+            Step::Index(i) if self.field.is_empty() || self.field.starts_with('[') => {
+                format!("[{i}]")
+            }
+            Step::Index(i) => format!("[{i}]."),
+        };
+        self.field.insert_str(0, &head);
+        self
+    }
 }
 
 /// One step of a field's path: a field's name or an element's index.
 #[derive(Clone, Copy)]
-enum Step<'a> {
+pub(crate) enum Step<'a> {
     Field(&'a str),
     Index(usize),
 }
 
 /// The decoder's position in one message.
-struct Decoder<'a> {
-    defs: &'a Definitions,
+pub(crate) struct Decoder<'a> {
+    pub(crate) defs: &'a Definitions,
     /// The bytes after the encapsulation header.
-    data: &'a [u8],
-    pos: usize,
-    little: bool,
-    budget: usize,
+    pub(crate) data: &'a [u8],
+    pub(crate) pos: usize,
+    pub(crate) little: bool,
+    pub(crate) budget: usize,
     /// The field path, for errors (written out only for one).
-    path: Vec<Step<'a>>,
+    pub(crate) path: Vec<Step<'a>>,
 }
 
 impl<'a> Decoder<'a> {
-    fn error(&self, reason: String) -> CdrError {
+    /// A decoder after the encapsulation header of `bytes`.
+    pub(crate) fn new(defs: &'a Definitions, bytes: &'a [u8]) -> Result<Self, CdrError> {
+        let Some(header) = bytes.get(..4) else {
+            return Err(CdrError {
+                field: String::new(),
+                offset: 0,
+                reason: format!(
+                    "{} bytes: shorter than the 4-byte encapsulation header",
+                    bytes.len()
+                ),
+            });
+        };
+        let kind = u16::from_be_bytes([header[0], header[1]]);
+        let little = match kind {
+            0x0000 => false,
+            0x0001 => true,
+            _ => {
+                return Err(CdrError {
+                    field: String::new(),
+                    offset: 0,
+                    reason: format!(
+                        "encapsulation {kind:#06x} ({}) is not plain CDR (0x0000 or 0x0001)",
+                        representation(kind)
+                    ),
+                });
+            }
+        };
+        Ok(Decoder {
+            defs,
+            data: &bytes[4..],
+            pos: 0,
+            little,
+            budget: value_budget(bytes.len()),
+            path: Vec::new(),
+        })
+    }
+
+    pub(crate) fn error(&self, reason: String) -> CdrError {
         let mut field = String::new();
         for step in &self.path {
             match step {
@@ -131,7 +168,7 @@ impl<'a> Decoder<'a> {
         }
     }
 
-    fn spend(&mut self) -> Result<(), CdrError> {
+    pub(crate) fn spend(&mut self) -> Result<(), CdrError> {
         if self.budget == 0 {
             return Err(self.error(format!(
                 "more values than a message of {} bytes can hold",
@@ -142,12 +179,12 @@ impl<'a> Decoder<'a> {
         Ok(())
     }
 
-    fn left(&self) -> usize {
+    pub(crate) fn left(&self) -> usize {
         self.data.len().saturating_sub(self.pos)
     }
 
     /// `n` bytes at alignment `align`.
-    fn take(&mut self, n: usize, align: usize) -> Result<&[u8], CdrError> {
+    pub(crate) fn take(&mut self, n: usize, align: usize) -> Result<&[u8], CdrError> {
         let start = self.pos.next_multiple_of(align);
         let end = start.checked_add(n).filter(|&e| e <= self.data.len());
         let Some(end) = end else {
@@ -160,7 +197,7 @@ impl<'a> Decoder<'a> {
         Ok(&self.data[start..end])
     }
 
-    fn u32(&mut self) -> Result<u32, CdrError> {
+    pub(crate) fn u32(&mut self) -> Result<u32, CdrError> {
         let b: [u8; 4] = self.take(4, 4)?.try_into().unwrap_or_default();
         Ok(if self.little {
             u32::from_le_bytes(b)
@@ -169,7 +206,7 @@ impl<'a> Decoder<'a> {
         })
     }
 
-    fn primitive(&mut self, p: Primitive) -> Result<Value, CdrError> {
+    fn primitive(&mut self, p: Primitive, out: &mut Value) -> Result<(), CdrError> {
         self.spend()?;
         let little = self.little;
         let b = self.take(p.size(), p.size())?;
@@ -183,7 +220,7 @@ impl<'a> Decoder<'a> {
                 }
             }};
         }
-        Ok(match p {
+        *out = match p {
             Primitive::Bool => Value::Bool(b[0] != 0),
             Primitive::I8 => Value::Int(i64::from(num!(i8))),
             Primitive::U8 => Value::UInt(u64::from(b[0])),
@@ -195,25 +232,33 @@ impl<'a> Decoder<'a> {
             Primitive::U64 => Value::UInt(num!(u64)),
             Primitive::F32 => Value::Float(f64::from(num!(f32))),
             Primitive::F64 => Value::Float(num!(f64)),
-        })
+        };
+        Ok(())
     }
 
-    fn string(&mut self) -> Result<Value, CdrError> {
+    fn string(&mut self, out: &mut Value) -> Result<(), CdrError> {
         self.spend()?;
         let n = self.u32()? as usize;
         let b = self.take(n, 1)?;
         let text = b.strip_suffix(&[0]).unwrap_or(b);
-        match core::str::from_utf8(text) {
-            Ok(s) => Ok(Value::Str(s.to_string())),
-            Err(e) => Err(self.error(format!("string is not UTF-8: {e}"))),
+        let text = match core::str::from_utf8(text) {
+            Ok(t) => t,
+            Err(e) => return Err(self.error(format!("string is not UTF-8: {e}"))),
+        };
+        if let Value::Str(s) = out {
+            s.clear();
+            s.push_str(text);
+        } else {
+            *out = Value::Str(text.to_string());
         }
+        Ok(())
     }
 
     /// One element of type `base`.
-    fn element(&mut self, base: &'a Base, depth: usize) -> Result<Value, CdrError> {
+    fn element(&mut self, base: &'a Base, depth: usize, out: &mut Value) -> Result<(), CdrError> {
         match base {
-            Base::Primitive(p) => self.primitive(*p),
-            Base::String => self.string(),
+            Base::Primitive(p) => self.primitive(*p, out),
+            Base::String => self.string(out),
             Base::WString => Err(self.error(
                 "wstring fields are not decoded (their wire form differs between middlewares)"
                     .into(),
@@ -221,16 +266,16 @@ impl<'a> Decoder<'a> {
             Base::Message(name) => {
                 let defs: &'a Definitions = self.defs;
                 let ty = defs
-                    .get(name)
+                    .resolve(name)
                     .ok_or_else(|| self.error(format!("type {name} is not defined")))?;
-                self.message(ty, depth + 1)
+                self.message(ty, depth + 1, out)
             }
         }
     }
 
     /// The fewest bytes an element of `base` takes on the wire (0 for a
     /// message: its fields may be empty sequences).
-    fn smallest(base: &Base) -> usize {
+    pub(crate) fn smallest(base: &Base) -> usize {
         match base {
             Base::Primitive(p) => p.size(),
             Base::String | Base::WString => 4,
@@ -238,7 +283,12 @@ impl<'a> Decoder<'a> {
         }
     }
 
-    fn message(&mut self, ty: &'a Arc<MessageType>, depth: usize) -> Result<Value, CdrError> {
+    fn message(
+        &mut self,
+        ty: &'a Arc<MessageType>,
+        depth: usize,
+        out: &mut Value,
+    ) -> Result<(), CdrError> {
         if depth > MAX_DEPTH {
             return Err(self.error(format!("message types nested deeper than {MAX_DEPTH}")));
         }
@@ -248,12 +298,22 @@ impl<'a> Decoder<'a> {
             // (`structure_needs_at_least_one_member`), which is on the wire.
             self.take(1, 1)?;
         }
-        let mut fields = Vec::with_capacity(ty.fields.len());
-        for f in &ty.fields {
+        // The message `out` holds, if of this type, is reused.
+        let reuse = matches!(out, Value::Message(m) if Arc::ptr_eq(&m.ty, ty));
+        if !reuse {
+            *out = Value::Message(Message {
+                ty: ty.clone(),
+                fields: vec![Value::Bool(false); ty.fields.len()],
+            });
+        }
+        let Value::Message(m) = out else {
+            return Err(self.error("internal: not a message".into()));
+        };
+        for (f, value) in ty.fields.iter().zip(m.fields.iter_mut()) {
             self.path.push(Step::Field(&f.name));
-            let value = match f.shape {
-                Shape::Single => self.element(&f.base, depth)?,
-                Shape::Fixed(n) => self.list(&f.base, n, depth)?,
+            match f.shape {
+                Shape::Single => self.element(&f.base, depth, value)?,
+                Shape::Fixed(n) => self.list(&f.base, n, depth, value)?,
                 Shape::Sequence(bound) => {
                     let n = self.u32()? as usize;
                     if let Some(b) = bound
@@ -261,19 +321,21 @@ impl<'a> Decoder<'a> {
                     {
                         return Err(self.error(format!("{n} elements, beyond the bound {b}")));
                     }
-                    self.list(&f.base, n, depth)?
+                    self.list(&f.base, n, depth, value)?;
                 }
-            };
-            fields.push(value);
+            }
             self.path.pop();
         }
-        Ok(Value::Message(Message {
-            ty: ty.clone(),
-            fields,
-        }))
+        Ok(())
     }
 
-    fn list(&mut self, base: &'a Base, n: usize, depth: usize) -> Result<Value, CdrError> {
+    fn list(
+        &mut self,
+        base: &'a Base,
+        n: usize,
+        depth: usize,
+        out: &mut Value,
+    ) -> Result<(), CdrError> {
         self.spend()?;
         let smallest = Self::smallest(base);
         if n.saturating_mul(smallest) > self.left() || n > self.budget {
@@ -282,13 +344,20 @@ impl<'a> Decoder<'a> {
                 self.left()
             )));
         }
-        let mut items = Vec::with_capacity(n);
-        for i in 0..n {
+        if !matches!(out, Value::List(_)) {
+            *out = Value::List(Vec::new());
+        }
+        let Value::List(items) = out else {
+            return Err(self.error("internal: not a list".into()));
+        };
+        items.truncate(n);
+        items.resize(n, Value::Bool(false));
+        for (i, item) in items.iter_mut().enumerate() {
             self.path.push(Step::Index(i));
-            items.push(self.element(base, depth)?);
+            self.element(base, depth, item)?;
             self.path.pop();
         }
-        Ok(Value::List(items))
+        Ok(())
     }
 }
 

@@ -24,6 +24,8 @@ use crate::error::{BagError, FieldProblem};
 use crate::mapping::{Defaults, Mapping};
 use crate::value::Value;
 
+mod fast;
+
 /// The static transforms' topic.
 pub const TF_STATIC: &str = "/tf_static";
 
@@ -52,18 +54,29 @@ struct Fields<'a> {
     value: &'a Value,
 }
 
+/// The error of `field` of the message `record` of `channel` in `file`.
+fn field_error(
+    file: &Path,
+    channel: &Channel,
+    record: u64,
+    field: &str,
+    reason: impl Into<String>,
+) -> BagError {
+    BagError::Field {
+        file: file.to_path_buf(),
+        record,
+        problem: Box::new(FieldProblem {
+            topic: channel.topic.clone(),
+            type_name: channel.type_name.clone(),
+            field: field.to_string(),
+            reason: reason.into(),
+        }),
+    }
+}
+
 impl Fields<'_> {
     fn error(&self, field: &str, reason: impl Into<String>) -> BagError {
-        BagError::Field {
-            file: self.file.to_path_buf(),
-            record: self.record,
-            problem: Box::new(FieldProblem {
-                topic: self.channel.topic.clone(),
-                type_name: self.channel.type_name.clone(),
-                field: field.to_string(),
-                reason: reason.into(),
-            }),
-        }
+        field_error(self.file, self.channel, self.record, field, reason)
     }
 
     fn at<'v>(&self, within: &'v Value, path: &str) -> Result<&'v Value, BagError> {
@@ -129,6 +142,17 @@ impl Fields<'_> {
     }
 }
 
+/// What [`to_locus`] keeps of a channel once its first message is read.
+struct ChannelState {
+    /// Whether the mapping reads the channel.
+    wanted: bool,
+    /// The value its messages are decoded into (reused).
+    value: Value,
+    /// Its fast path, once its first message has been taken (`Some(None)`:
+    /// it has none).
+    fast: Option<Option<fast::Fast>>,
+}
+
 /// What the bag gives, as it is read.
 #[derive(Default)]
 struct Gathered {
@@ -169,29 +193,56 @@ pub fn to_locus(path: &Path, mapping: &Mapping, mapping_file: &str) -> Result<Lo
         beams: vec![None; beam_topics.len()],
         ..Gathered::default()
     };
+    // By channel id, once its first message is read.
+    let mut by_channel: Vec<Option<ChannelState>> = Vec::new();
     let mut seen: HashSet<String> = HashSet::new();
     read(path, |channel, m| {
-        if !seen.contains(&channel.topic) {
-            seen.insert(channel.topic.clone());
-            g.topics.push(channel.topic.clone());
+        let slot = usize::from(channel.id);
+        if by_channel.len() <= slot {
+            by_channel.resize_with(slot + 1, || None);
         }
-        let topic = channel.topic.as_str();
-        let wanted = topic == mapping.velocity.topic
-            || mapping.landmarks.as_ref().is_some_and(|l| l.topic == topic)
-            || mapping.truth.as_ref().is_some_and(|t| t.topic == topic)
-            || beam_topics.contains(&topic)
-            || topic == TF_STATIC;
-        if !wanted {
+        let state = by_channel[slot].get_or_insert_with(|| {
+            if seen.insert(channel.topic.clone()) {
+                g.topics.push(channel.topic.clone());
+            }
+            let topic = channel.topic.as_str();
+            let wanted = topic == mapping.velocity.topic
+                || mapping.landmarks.as_ref().is_some_and(|l| l.topic == topic)
+                || mapping.truth.as_ref().is_some_and(|t| t.topic == topic)
+                || beam_topics.contains(&topic)
+                || topic == TF_STATIC;
+            ChannelState {
+                wanted,
+                value: Value::Bool(false),
+                fast: None,
+            }
+        });
+        let ChannelState {
+            wanted,
+            value,
+            fast,
+        } = state;
+        if !*wanted {
             return Ok(());
         }
-        let value = channel.decode(path, m)?;
+        if let Some(Some(fast)) = fast {
+            return fast.take(path, channel, m, mapping, &mut g);
+        }
+        channel.decode_into(path, m, value)?;
         let f = Fields {
             file: path,
             channel,
             record: m.record,
-            value: &value,
+            value,
         };
-        take(&f, m, mapping, &mut g)
+        take(&f, m, mapping, &mut g)?;
+        // The channel's first message went the full way: its later ones
+        // may take the fast path.
+        if fast.is_none() {
+            let beam = beam_topics.contains(&channel.topic.as_str());
+            *fast = Some(fast::Fast::compile(channel, mapping, beam));
+        }
+        Ok(())
     })?;
     let missing = |key: &str, topic: &str| BagError::Mapping {
         file: mapping_file.to_string(),
@@ -367,10 +418,7 @@ fn take(
         let angular = f.path(v.angular.as_deref(), usual.map(|u| u.1), "velocity.angular")?;
         let time = f.time(v.stamp.as_deref(), m.log_time_ns)?;
         if g.odometry.last().is_some_and(|o| time < o.time) {
-            return Err(f.error(
-                v.stamp.as_deref().unwrap_or("time"),
-                format!("velocity at {time} s is before the one before it"),
-            ));
+            return Err(f.error(v.stamp.as_deref().unwrap_or("time"), going_back(time)));
         }
         g.odometry.push(Odometry {
             time,
@@ -393,14 +441,10 @@ fn take(
             None => core::slice::from_ref(f.value),
         };
         for s in sightings {
-            let id = f.number(s, &l.id)?;
-            if !(id >= 0.0 && id <= f64::from(u32::MAX) && id.fract() == 0.0) {
-                return Err(f.error(&l.id, format!("{id} is not a landmark id")));
-            }
-            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+            let id = landmark_id(f.number(s, &l.id)?).map_err(|r| f.error(&l.id, r))?;
             g.measurements.push(LandmarkMeasurement {
                 time,
-                id: id as u32,
+                id,
                 range: f.number(s, &l.range)?,
                 bearing: if l.bearing.is_empty() {
                     None
@@ -472,6 +516,21 @@ fn take(
         });
     }
     Ok(())
+}
+
+/// Why a velocity at `time` (s) is refused: it goes back.
+fn going_back(time: f64) -> String {
+    format!("velocity at {time} s is before the one before it")
+}
+
+/// A landmark id read as a number, or why it is none.
+fn landmark_id(id: f64) -> Result<u32, String> {
+    if !(id >= 0.0 && id <= f64::from(u32::MAX) && id.fract() == 0.0) {
+        return Err(format!("{id} is not a landmark id"));
+    }
+    // A whole number in range.
+    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+    Ok(id as u32)
 }
 
 /// The limits `[min, max]` of a range sensor's message, checked.

@@ -25,6 +25,7 @@ pub mod convert;
 pub mod error;
 pub mod mapping;
 pub mod msgdef;
+pub mod project;
 pub mod value;
 
 pub use bag::{Channel, RECORD_LIMIT, RawMessage, Topic, read, topics};

@@ -133,6 +133,8 @@ pub struct Definitions {
     /// The channel's own type.
     pub root: Arc<MessageType>,
     types: HashMap<Arc<str>, Arc<MessageType>>,
+    /// The same types in the schema's order.
+    all: Vec<Arc<MessageType>>,
 }
 
 /// The longest fixed array or bound a schema may declare (a schema is
@@ -221,8 +223,12 @@ impl Definitions {
             }
         }
         let names: Vec<String> = raw.iter().map(|(t, _, _)| t.clone()).collect();
+        // One Arc per type name, shared by the type and every field of
+        // it, so that the decoder finds a field's type by pointer.
+        let interned: Vec<Arc<str>> = names.iter().map(|n| Arc::from(n.as_str())).collect();
         let mut types = HashMap::new();
-        for (ty, _, fields) in raw {
+        let mut all = Vec::with_capacity(raw.len());
+        for (k, (_, _, fields)) in raw.into_iter().enumerate() {
             let mut out = Vec::with_capacity(fields.len());
             for (n, (fname, base, shape)) in fields {
                 let base = match base {
@@ -230,13 +236,13 @@ impl Definitions {
                     BaseName::String => Base::String,
                     BaseName::WString => Base::WString,
                     BaseName::Message(m) => {
-                        if !names.contains(&m) {
+                        let Some(i) = names.iter().position(|t| *t == m) else {
                             return Err(err(
                                 n,
                                 format!("field {fname}: type {m} is not defined in the schema"),
                             ));
-                        }
-                        Base::Message(m.into())
+                        };
+                        Base::Message(interned[i].clone())
                     }
                 };
                 out.push(Field {
@@ -245,17 +251,30 @@ impl Definitions {
                     shape,
                 });
             }
-            let name: Arc<str> = ty.into();
-            types.insert(name.clone(), Arc::new(MessageType { name, fields: out }));
+            let name = interned[k].clone();
+            let ty = Arc::new(MessageType { name, fields: out });
+            all.push(ty.clone());
+            types.insert(interned[k].clone(), ty);
         }
         let root = types[root_name.as_str()].clone();
-        Ok(Self { root, types })
+        Ok(Self { root, types, all })
     }
 
     /// The message type `name` (`pkg/Type`).
     #[must_use]
     pub fn get(&self, name: &str) -> Option<&Arc<MessageType>> {
         self.types.get(name)
+    }
+
+    /// The type a field's [`Base::Message`] names: found by pointer among
+    /// the schema's few types (its name is the type's own `Arc`), with no
+    /// hashing, else by name.
+    #[must_use]
+    pub fn resolve(&self, name: &Arc<str>) -> Option<&Arc<MessageType>> {
+        self.all
+            .iter()
+            .find(|t| Arc::ptr_eq(&t.name, name))
+            .or_else(|| self.get(name))
     }
 }
 
