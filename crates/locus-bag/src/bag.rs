@@ -63,6 +63,22 @@ impl Channel {
         message: &RawMessage<'_>,
         out: &mut Value,
     ) -> Result<(), BagError> {
+        self.with_definitions(file, message, |defs, data| {
+            crate::cdr::decode_into(defs, data, out)
+        })
+    }
+
+    /// `read` of this channel's definitions and `message`'s CDR bytes,
+    /// its error naming the file, the record, the topic and the type.
+    ///
+    /// # Errors
+    /// The channel cannot be decoded, or `read` fails.
+    pub(crate) fn with_definitions(
+        &self,
+        file: &Path,
+        message: &RawMessage<'_>,
+        read: impl FnOnce(&Definitions, &[u8]) -> Result<(), crate::CdrError>,
+    ) -> Result<(), BagError> {
         let defs = self
             .definitions
             .as_ref()
@@ -71,7 +87,7 @@ impl Channel {
                 topic: self.topic.clone(),
                 reason: reason.clone(),
             })?;
-        crate::cdr::decode_into(defs, message.data, out).map_err(|source| BagError::Message {
+        read(defs, message.data).map_err(|source| BagError::Message {
             file: file.to_path_buf(),
             record: message.record,
             topic: self.topic.clone(),

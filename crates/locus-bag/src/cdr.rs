@@ -207,6 +207,12 @@ impl<'a> Decoder<'a> {
     }
 
     fn primitive(&mut self, p: Primitive, out: &mut Value) -> Result<(), CdrError> {
+        *out = self.scalar(p)?;
+        Ok(())
+    }
+
+    /// The primitive `p` at the position, aligned to its size.
+    pub(crate) fn scalar(&mut self, p: Primitive) -> Result<Value, CdrError> {
         self.spend()?;
         let little = self.little;
         let b = self.take(p.size(), p.size())?;
@@ -220,7 +226,7 @@ impl<'a> Decoder<'a> {
                 }
             }};
         }
-        *out = match p {
+        Ok(match p {
             Primitive::Bool => Value::Bool(b[0] != 0),
             Primitive::I8 => Value::Int(i64::from(num!(i8))),
             Primitive::U8 => Value::UInt(u64::from(b[0])),
@@ -232,8 +238,7 @@ impl<'a> Decoder<'a> {
             Primitive::U64 => Value::UInt(num!(u64)),
             Primitive::F32 => Value::Float(f64::from(num!(f32))),
             Primitive::F64 => Value::Float(num!(f64)),
-        };
-        Ok(())
+        })
     }
 
     fn string(&mut self, out: &mut Value) -> Result<(), CdrError> {

@@ -107,35 +107,10 @@ impl Projection {
 }
 
 impl<'a> Decoder<'a> {
+    /// The number `p` at the position, as [`crate::Value::as_f64`] gives
+    /// the value the full decoder builds.
     fn number(&mut self, p: Primitive) -> Result<f64, CdrError> {
-        self.spend()?;
-        let little = self.little;
-        let b = self.take(p.size(), p.size())?;
-        macro_rules! num {
-            ($t:ty) => {{
-                let a = b.try_into().unwrap_or_default();
-                if little {
-                    <$t>::from_le_bytes(a)
-                } else {
-                    <$t>::from_be_bytes(a)
-                }
-            }};
-        }
-        // As Value::as_f64 converts the value the full decoder builds.
-        #[allow(clippy::cast_precision_loss)]
-        Ok(match p {
-            Primitive::Bool => f64::from(u8::from(b[0] != 0)),
-            Primitive::I8 => f64::from(num!(i8)),
-            Primitive::U8 => f64::from(b[0]),
-            Primitive::I16 => f64::from(num!(i16)),
-            Primitive::U16 => f64::from(num!(u16)),
-            Primitive::I32 => f64::from(num!(i32)),
-            Primitive::U32 => f64::from(num!(u32)),
-            Primitive::I64 => num!(i64) as f64,
-            Primitive::U64 => num!(u64) as f64,
-            Primitive::F32 => f64::from(num!(f32)),
-            Primitive::F64 => num!(f64),
-        })
+        self.scalar(p).map(|v| v.as_f64().unwrap_or(f64::NAN))
     }
 
     fn message_type(&self, base: &Base) -> Result<&'a Arc<MessageType>, CdrError> {

@@ -388,3 +388,74 @@ fn hostile_bags_are_errors_naming_the_record_and_the_field() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A velocity topic's messages after the first go through the projection
+/// of its mapped numbers: the same figures as the full decoder's, and a
+/// damaged later message is still an error naming its record and field,
+/// whether the field is read or skipped.
+#[test]
+fn later_messages_of_a_mapped_topic_read_alike_and_fail_alike() {
+    let dir = scratch("fast");
+    let schema = "std_msgs/Header header\nfloat64[] v\nfloat64 speed\nfloat64 turn\n\
+        ===\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n";
+    let msg = |sec: i32, ns: u32, speed: f64, turn: f64, count: u32| {
+        let mut b = vec![0, 1, 0, 0];
+        b.extend_from_slice(&sec.to_le_bytes());
+        b.extend_from_slice(&ns.to_le_bytes());
+        b.extend_from_slice(&5u32.to_le_bytes());
+        b.extend_from_slice(b"base\0");
+        b.extend_from_slice(&[0, 0, 0]);
+        b.extend_from_slice(&count.to_le_bytes());
+        b.extend_from_slice(&speed.to_le_bytes());
+        b.extend_from_slice(&turn.to_le_bytes());
+        b
+    };
+    let mapping = locus_bag::Mapping::from_toml(
+        "base_frame = \"base\"\n[velocity]\ntopic = \"/odom\"\nlinear = \"speed\"\nangular = \"turn\"\n",
+        "m.toml",
+    )
+    .unwrap();
+    let good: Vec<Vec<u8>> = (0..4)
+        .map(|i| msg(10 + i, 250_000_000, 0.1 * f64::from(i), -0.3, 0))
+        .collect();
+    let p = dir.join("fast.mcap");
+    write_bag(&p, "p/msg/V", schema, "cdr", &good);
+    let log = locus_bag::convert::to_locus(&p, &mapping, "m.toml").unwrap();
+    let want: Vec<(f64, f64, f64)> = (0..4)
+        .map(|i| (f64::from(10 + i) + 0.25, 0.1 * f64::from(i), -0.3))
+        .collect();
+    let got: Vec<(f64, f64, f64)> = log
+        .odometry
+        .iter()
+        .map(|o| (o.time, o.v, o.omega))
+        .collect();
+    assert_eq!(got, want);
+    // A skipped sequence claiming a billion elements, in the third message.
+    let mut bad = good.clone();
+    bad[2] = msg(12, 0, 0.0, 0.0, 1_000_000_000);
+    write_bag(&p, "p/msg/V", schema, "cdr", &bad);
+    let e = locus_bag::convert::to_locus(&p, &mapping, "m.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("message on /odom at 1200000000 ns (p/msg/V): field v at byte 28: 1000000000 elements cannot fit"), "{e}");
+    // A read field cut short.
+    let mut bad = good.clone();
+    let cut = bad[3].len() - 4;
+    bad[3].truncate(cut);
+    write_bag(&p, "p/msg/V", schema, "cdr", &bad);
+    let e = locus_bag::convert::to_locus(&p, &mapping, "m.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("field turn at byte 36: needs 8 bytes"), "{e}");
+    // A velocity going back in time, named by the time it has.
+    let mut bad = good;
+    bad[3] = msg(11, 0, 0.0, 0.0, 0);
+    write_bag(&p, "p/msg/V", schema, "cdr", &bad);
+    let e = locus_bag::convert::to_locus(&p, &mapping, "m.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("velocity at 11 s is before the one before it"),
+        "{e}"
+    );
+}

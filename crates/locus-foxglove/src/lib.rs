@@ -6,7 +6,7 @@
 //! covariance ellipse and the map as `foxglove.SceneUpdate` (an occupancy
 //! grid as `foxglove.Grid`), the errors with their 3-sigma bands and each
 //! correction's NIS as plottable series, and the summary as a
-//! `foxglove.Log` ([`encode`], [`topic`]). They go to an MCAP file
+//! `foxglove.Log` ([`frame`], [`scene`], [`summary`], [`topic`]). They go to an MCAP file
 //! ([`McapOut`]) or, live, over the Foxglove WebSocket protocol ([`ws`]).
 //!
 //! **JSON, not protobuf.** Foxglove publishes both. JSON is chosen because

@@ -134,24 +134,8 @@ impl Fast {
         mapping: &Mapping,
         g: &mut Gathered,
     ) -> Result<(), BagError> {
-        let defs = channel
-            .definitions
-            .as_ref()
-            .map_err(|reason| BagError::Channel {
-                file: file.to_path_buf(),
-                topic: channel.topic.clone(),
-                reason: reason.clone(),
-            })?;
-        self.projection
-            .read(defs, m.data, &mut self.slots)
-            .map_err(|source| BagError::Message {
-                file: file.to_path_buf(),
-                record: m.record,
-                topic: channel.topic.clone(),
-                type_name: channel.type_name.clone(),
-                log_time_ns: m.log_time_ns,
-                source: Box::new(source),
-            })?;
+        let (projection, slots) = (&self.projection, &mut self.slots);
+        channel.with_definitions(file, m, |defs, data| projection.read(defs, data, slots))?;
         let s = &self.slots;
         // The stamp's integers, exact in f64, as `seconds` takes them.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
