@@ -92,6 +92,33 @@ impl CdrError {
     }
 }
 
+/// The primitive `p` in its `p.size()` bytes `b`, little-endian or not.
+pub(crate) fn primitive(b: &[u8], p: Primitive, little: bool) -> Value {
+    macro_rules! num {
+        ($t:ty) => {{
+            let a = b.try_into().unwrap_or_default();
+            if little {
+                <$t>::from_le_bytes(a)
+            } else {
+                <$t>::from_be_bytes(a)
+            }
+        }};
+    }
+    match p {
+        Primitive::Bool => Value::Bool(b[0] != 0),
+        Primitive::I8 => Value::Int(i64::from(num!(i8))),
+        Primitive::U8 => Value::UInt(u64::from(b[0])),
+        Primitive::I16 => Value::Int(i64::from(num!(i16))),
+        Primitive::U16 => Value::UInt(u64::from(num!(u16))),
+        Primitive::I32 => Value::Int(i64::from(num!(i32))),
+        Primitive::U32 => Value::UInt(u64::from(num!(u32))),
+        Primitive::I64 => Value::Int(num!(i64)),
+        Primitive::U64 => Value::UInt(num!(u64)),
+        Primitive::F32 => Value::Float(f64::from(num!(f32))),
+        Primitive::F64 => Value::Float(num!(f64)),
+    }
+}
+
 /// One step of a field's path: a field's name or an element's index.
 #[derive(Clone, Copy)]
 pub(crate) enum Step<'a> {
@@ -185,7 +212,9 @@ impl<'a> Decoder<'a> {
 
     /// `n` bytes at alignment `align`.
     pub(crate) fn take(&mut self, n: usize, align: usize) -> Result<&[u8], CdrError> {
-        let start = self.pos.next_multiple_of(align);
+        // Alignments are 1, 2, 4 or 8: a mask, not a division.
+        debug_assert!(align.is_power_of_two());
+        let start = (self.pos + align - 1) & !(align - 1);
         let end = start.checked_add(n).filter(|&e| e <= self.data.len());
         let Some(end) = end else {
             return Err(self.error(format!(
@@ -216,29 +245,7 @@ impl<'a> Decoder<'a> {
         self.spend()?;
         let little = self.little;
         let b = self.take(p.size(), p.size())?;
-        macro_rules! num {
-            ($t:ty) => {{
-                let a = b.try_into().unwrap_or_default();
-                if little {
-                    <$t>::from_le_bytes(a)
-                } else {
-                    <$t>::from_be_bytes(a)
-                }
-            }};
-        }
-        Ok(match p {
-            Primitive::Bool => Value::Bool(b[0] != 0),
-            Primitive::I8 => Value::Int(i64::from(num!(i8))),
-            Primitive::U8 => Value::UInt(u64::from(b[0])),
-            Primitive::I16 => Value::Int(i64::from(num!(i16))),
-            Primitive::U16 => Value::UInt(u64::from(num!(u16))),
-            Primitive::I32 => Value::Int(i64::from(num!(i32))),
-            Primitive::U32 => Value::UInt(u64::from(num!(u32))),
-            Primitive::I64 => Value::Int(num!(i64)),
-            Primitive::U64 => Value::UInt(num!(u64)),
-            Primitive::F32 => Value::Float(f64::from(num!(f32))),
-            Primitive::F64 => Value::Float(num!(f64)),
-        })
+        Ok(primitive(b, p, little))
     }
 
     fn string(&mut self, out: &mut Value) -> Result<(), CdrError> {

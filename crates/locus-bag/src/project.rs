@@ -9,12 +9,13 @@
 //! [`crate::Value`] instead. Skipping keeps the decoder's bounds: a count
 //! is checked against the bytes left and the values a message may hold,
 //! and nesting against [`crate::cdr::MAX_DEPTH`]. A string skipped is not
-//! checked for UTF-8: it is not read. An error's field path is written as
-//! the error goes up, so reading builds nothing.
+//! checked for UTF-8: it is not read. Single message fields are
+//! flattened once into their fields' steps, each with its path for errors,
+//! so reading a message is one loop that builds nothing.
 
 use alloc::sync::Arc;
 
-use crate::cdr::{Decoder, MAX_DEPTH, Step};
+use crate::cdr::{Decoder, MAX_DEPTH, Step, primitive};
 use crate::error::CdrError;
 use crate::msgdef::{Base, Definitions, MessageType, Primitive, Shape};
 
@@ -33,12 +34,128 @@ enum Want {
 #[derive(Debug, Clone, PartialEq)]
 struct Node(Vec<Want>);
 
+/// One step of reading a message, its single message fields flattened
+/// into their fields (their layout is fixed by the schema).
+#[derive(Debug, Clone, PartialEq)]
+enum Op {
+    /// A number into a slot.
+    Number(usize, Primitive),
+    /// A primitive skipped.
+    Skip(Primitive),
+    /// A string skipped.
+    SkipString,
+    /// The byte of a message type with no fields.
+    EmptyMessage,
+    /// An array or a sequence skipped, element by element where it must.
+    SkipList(Base, Shape),
+    /// A `wstring`: refused, as the full decoder refuses it.
+    WString,
+    /// Consecutive primitives read and skipped as one: aligned to `align`
+    /// (the largest of theirs), `size` bytes, the numbers wanted at their
+    /// offsets in it; each primitive's type and path, to name the one a
+    /// short message cuts.
+    Block {
+        align: usize,
+        size: usize,
+        reads: Vec<(usize, usize, Primitive)>,
+        parts: Vec<(Primitive, String)>,
+    },
+}
+
+/// `ops` with each run of primitives that share the first one's
+/// alignment or less merged into one [`Op::Block`]: the offsets in a run
+/// are fixed once its start is aligned. The run's path (for an error) is
+/// its first field's.
+fn blocks(ops: Vec<(Op, String)>) -> Vec<(Op, String)> {
+    let mut out: Vec<(Op, String)> = Vec::with_capacity(ops.len());
+    for (op, path) in ops {
+        let (p, slot) = match op {
+            Op::Number(slot, p) => (p, Some(slot)),
+            Op::Skip(p) => (p, None),
+            other => {
+                out.push((other, path));
+                continue;
+            }
+        };
+        let n = p.size();
+        if let Some((
+            Op::Block {
+                align,
+                size,
+                reads,
+                parts,
+            },
+            _,
+        )) = out.last_mut()
+            && n <= *align
+        {
+            let offset = size.next_multiple_of(n);
+            if let Some(slot) = slot {
+                reads.push((offset, slot, p));
+            }
+            *size = offset + n;
+            parts.push((p, path));
+            continue;
+        }
+        let reads = slot.map(|slot| vec![(0, slot, p)]).unwrap_or_default();
+        let parts = vec![(p, path.clone())];
+        out.push((
+            Op::Block {
+                align: n,
+                size: n,
+                reads,
+                parts,
+            },
+            path,
+        ));
+    }
+    out
+}
+
 /// The numeric fields at fixed paths of a channel's messages.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Projection {
-    root: Node,
+    /// The steps, each with its field's path (for errors).
+    ops: Vec<(Op, String)>,
     /// Each path's primitive type, by slot.
     kinds: Vec<Primitive>,
+}
+
+/// Appends the steps of reading `ty` as `node` wants (`None`: skipping all
+/// of it) to `ops`, paths under `prefix`; `None` if single message fields
+/// nest beyond [`MAX_DEPTH`] (a type that contains itself).
+fn flatten(
+    defs: &Definitions,
+    ty: &MessageType,
+    node: Option<&Node>,
+    prefix: &str,
+    depth: usize,
+    ops: &mut Vec<(Op, String)>,
+) -> Option<()> {
+    if depth > MAX_DEPTH {
+        return None;
+    }
+    if ty.fields.is_empty() {
+        ops.push((Op::EmptyMessage, prefix.trim_end_matches('.').to_string()));
+    }
+    for (i, f) in ty.fields.iter().enumerate() {
+        let path = format!("{prefix}{}", f.name);
+        match (node.map(|n| &n.0[i]), &f.base, f.shape) {
+            (Some(Want::Leaf(slot, p)), _, _) => ops.push((Op::Number(*slot, *p), path)),
+            (Some(Want::Inner(t, inner)), _, _) => {
+                flatten(defs, t, Some(inner), &format!("{path}."), depth + 1, ops)?;
+            }
+            (_, Base::Primitive(p), Shape::Single) => ops.push((Op::Skip(*p), path)),
+            (_, Base::String, Shape::Single) => ops.push((Op::SkipString, path)),
+            (_, Base::WString, Shape::Single) => ops.push((Op::WString, path)),
+            (_, Base::Message(name), Shape::Single) => {
+                let t = defs.resolve(name)?;
+                flatten(defs, t, None, &format!("{path}."), depth + 1, ops)?;
+            }
+            (_, base, shape) => ops.push((Op::SkipList(base.clone(), shape), path)),
+        }
+    }
+    Some(())
 }
 
 impl Projection {
@@ -85,7 +202,12 @@ impl Projection {
                 node = next;
             }
         }
-        Some(Self { root, kinds })
+        let mut ops = Vec::new();
+        flatten(defs, &defs.root, Some(&root), "", 0, &mut ops)?;
+        Some(Self {
+            ops: blocks(ops),
+            kinds,
+        })
     }
 
     /// The primitive type of slot `slot`.
@@ -102,7 +224,50 @@ impl Projection {
     /// As [`crate::cdr::decode`] for the fields it reads or skips.
     pub fn read(&self, defs: &Definitions, bytes: &[u8], out: &mut [f64]) -> Result<(), CdrError> {
         let mut d = Decoder::new(defs, bytes)?;
-        d.project(&defs.root, &self.root, 0, out)
+        for (op, path) in &self.ops {
+            let done = match op {
+                Op::Number(slot, p) => d.number(*p).map(|v| {
+                    if let Some(o) = out.get_mut(*slot) {
+                        *o = v;
+                    }
+                }),
+                Op::Skip(p) => d.take(p.size(), p.size()).map(|_| ()),
+                Op::SkipString => d.skip_element(&Base::String, 0),
+                Op::EmptyMessage => d.take(1, 1).map(|_| ()),
+                Op::SkipList(base, shape) => d.skip_field(base, *shape, 0),
+                Op::WString => d.skip_element(&Base::WString, 0),
+                Op::Block {
+                    align,
+                    size,
+                    reads,
+                    parts,
+                } => {
+                    let (little, start) = (d.little, d.pos);
+                    match d.take(*size, *align) {
+                        Ok(b) => {
+                            for &(offset, slot, p) in reads {
+                                let v = primitive(&b[offset..offset + p.size()], p, little);
+                                if let Some(o) = out.get_mut(slot) {
+                                    *o = v.as_f64().unwrap_or(f64::NAN);
+                                }
+                            }
+                            Ok(())
+                        }
+                        // Cut short: the primitive it cuts, named as alone.
+                        Err(e) => {
+                            d.pos = start;
+                            for (p, path) in parts {
+                                d.take(p.size(), p.size())
+                                    .map_err(|e| e.within(Step::Field(path)))?;
+                            }
+                            Err(e)
+                        }
+                    }
+                }
+            };
+            done.map_err(|e| e.within(Step::Field(path)))?;
+        }
+        Ok(())
     }
 }
 
@@ -121,36 +286,6 @@ impl<'a> Decoder<'a> {
                 .ok_or_else(|| self.error(format!("type {name} is not defined"))),
             _ => Err(self.error("internal: not a message field".into())),
         }
-    }
-
-    /// The fields of `ty` that `node` wants, into `out`; the others skipped.
-    fn project(
-        &mut self,
-        ty: &Arc<MessageType>,
-        node: &Node,
-        depth: usize,
-        out: &mut [f64],
-    ) -> Result<(), CdrError> {
-        if depth > MAX_DEPTH {
-            return Err(self.error(format!("message types nested deeper than {MAX_DEPTH}")));
-        }
-        self.spend()?;
-        if ty.fields.is_empty() {
-            self.take(1, 1)?;
-        }
-        for (f, want) in ty.fields.iter().zip(&node.0) {
-            match want {
-                Want::Skip => self.skip_field(&f.base, f.shape, depth),
-                Want::Leaf(slot, p) => self.number(*p).map(|v| {
-                    if let Some(o) = out.get_mut(*slot) {
-                        *o = v;
-                    }
-                }),
-                Want::Inner(t, inner) => self.project(t, inner, depth + 1, out),
-            }
-            .map_err(|e| e.within(Step::Field(&f.name)))?;
-        }
-        Ok(())
     }
 
     fn skip_field(&mut self, base: &Base, shape: Shape, depth: usize) -> Result<(), CdrError> {
