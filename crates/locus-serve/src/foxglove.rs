@@ -182,6 +182,8 @@ async fn client(mut socket: WebSocket, hub: Arc<Hub>) {
         }
     }
     let mut subs = ws::Subscriptions::default();
+    // The latched messages sent on subscribing: topic and time.
+    let mut sent: Vec<(locus_foxglove::Topic, u64)> = Vec::new();
     loop {
         tokio::select! {
             incoming = socket.recv() => {
@@ -208,13 +210,21 @@ async fn client(mut socket: WebSocket, hub: Arc<Hub>) {
                     .unwrap_or_else(PoisonError::into_inner)
                     .iter()
                     .filter(|m| before.frame(m).is_none())
-                    .filter_map(|m| subs.frame(m))
+                    .filter_map(|m| {
+                        if !sent.contains(&(m.topic, m.time)) {
+                            sent.push((m.topic, m.time));
+                        }
+                        subs.frame(m)
+                    })
                     .collect();
                 for bytes in latched {
                     if socket.send(WsMessage::Binary(bytes.into())).await.is_err() { return; }
                 }
             }
             m = rx.recv() => match m {
+                // A latched message this client already has (it latched
+                // while the client was subscribing) is not sent twice.
+                Ok(m) if sent.contains(&(m.topic, m.time)) => {}
                 Ok(m) => {
                     if let Some(bytes) = subs.frame(&m)
                         && socket.send(WsMessage::Binary(bytes.into())).await.is_err()
