@@ -13,7 +13,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-step() { printf '\n== %s\n' "$*"; }
+START=$(date +%s)
+step() { printf '\n== %s (at %d s)\n' "$*" "$(($(date +%s) - START))"; }
 
 # A full run is one-shot: incremental caches would only cost disk (over 1 GB
 # for the optimised test profile). A developer may set CARGO_INCREMENTAL=1.
@@ -91,8 +92,8 @@ cargo test --workspace --locked
 step "regression guards: byte-identical run and replay logs (scripts/regression-guards.sha256)"
 bash scripts/regression_guards.sh
 
-step "benchmarks compile"
-cargo bench --workspace --locked --no-run
+step "benchmarks compile (in the test profile: the tests' build is shared)"
+cargo test --workspace --locked --benches --no-run
 
 step "firmware: format, clippy (thumbv7em-none-eabihf and host), docs"
 (cd firmware && cargo fmt --all -- --check)
@@ -106,4 +107,4 @@ step "firmware: under QEMU mps2-an386, bit-identical to the host f32 run; footpr
 echo
 disk
 du -sh "$TARGET_DIR" firmware/target 2>/dev/null || true
-echo "all tests passed"
+echo "all tests passed in $(($(date +%s) - START)) s"
