@@ -285,9 +285,24 @@ impl<'a> Decoder<'a> {
         }
     }
 
+    /// Spends a value on a list of `n` elements of `base`, refusing a
+    /// count that cannot fit in the bytes left or the values a message
+    /// may hold: nothing is allocated or looped over for it.
+    pub(crate) fn list_count(&mut self, base: &Base, n: usize) -> Result<(), CdrError> {
+        self.spend()?;
+        let smallest = Self::smallest(base);
+        if n.saturating_mul(smallest) > self.left() || n > self.budget {
+            return Err(self.error(format!(
+                "{n} elements cannot fit in the {} bytes left",
+                self.left()
+            )));
+        }
+        Ok(())
+    }
+
     /// The fewest bytes an element of `base` takes on the wire (0 for a
     /// message: its fields may be empty sequences).
-    pub(crate) fn smallest(base: &Base) -> usize {
+    fn smallest(base: &Base) -> usize {
         match base {
             Base::Primitive(p) => p.size(),
             Base::String | Base::WString => 4,
@@ -348,14 +363,7 @@ impl<'a> Decoder<'a> {
         depth: usize,
         out: &mut Value,
     ) -> Result<(), CdrError> {
-        self.spend()?;
-        let smallest = Self::smallest(base);
-        if n.saturating_mul(smallest) > self.left() || n > self.budget {
-            return Err(self.error(format!(
-                "{n} elements cannot fit in the {} bytes left",
-                self.left()
-            )));
-        }
+        self.list_count(base, n)?;
         if !matches!(out, Value::List(_)) {
             *out = Value::List(Vec::new());
         }

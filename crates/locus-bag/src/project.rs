@@ -338,14 +338,7 @@ impl<'a> Decoder<'a> {
     }
 
     fn skip_list(&mut self, base: &Base, n: usize, depth: usize) -> Result<(), CdrError> {
-        self.spend()?;
-        let smallest = Self::smallest(base);
-        if n.saturating_mul(smallest) > self.left() || n > self.budget {
-            return Err(self.error(format!(
-                "{n} elements cannot fit in the {} bytes left",
-                self.left()
-            )));
-        }
+        self.list_count(base, n)?;
         if let Base::Primitive(p) = base {
             // Aligned once, the elements follow each other with no padding.
             self.budget -= n;
