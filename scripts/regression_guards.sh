@@ -13,11 +13,12 @@ SUMS=scripts/regression-guards.sha256
 DATA=${LOCUS_MRCLAM:-../shared/data/mrclam/MRCLAM_Dataset6}
 OUT=$(mktemp -d)
 trap 'rm -rf "$OUT"' EXIT
-# The test profile's binary (optimised as release is, and the one `cargo
-# test` has just built): no second build of the workspace. Its logs are
+# The binary `cargo test --workspace` builds for the integration tests
+# (test profile, optimised as release is, features unified with the
+# tests'): after the tests, nothing is built again. Its logs are
 # byte-identical to the release binary's (checked when the profile was
 # chosen).
-cargo build --profile test --locked -p locus >/dev/null
+cargo test --workspace --locked --no-run --quiet >/dev/null
 BIN=${CARGO_TARGET_DIR:-./target}/debug/locus
 for s in square square-ideal wall45 tricycle-slip hover; do
   "$BIN" run "$s" --seed 1 --no-plots --out "$OUT/run-$s" >/dev/null
