@@ -11,7 +11,6 @@ use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 use locus_logs::BeamSensor;
-use locus_logs::beam_sensor::{MAX_BEAMS, MAX_RANGE_LIMIT};
 use locus_logs::locus_csv::{LandmarkMeasurement, LocusLog, MapLandmark};
 use locus_logs::mrclam::{Groundtruth, Odometry, TruthPose};
 use locus_logs::scans::Scans;
@@ -19,12 +18,15 @@ use locus_logs::se2::{Pose, compose};
 use locus_logs::sensor::SensorMount;
 use locus_logs::wall::{MapPath, Wall};
 
-use crate::bag::{Channel, RawMessage, Topic, read};
+use crate::bag::{Channel, RawMessage, read};
 use crate::error::{BagError, FieldProblem};
 use crate::mapping::{Defaults, Mapping};
 use crate::value::Value;
 
+mod beams;
 mod fast;
+
+use beams::{range, scan};
 
 /// The static transforms' topic.
 pub const TF_STATIC: &str = "/tf_static";
@@ -531,127 +533,6 @@ fn landmark_id(id: f64) -> Result<u32, String> {
     // A whole number in range.
     #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
     Ok(id as u32)
-}
-
-/// The limits `[min, max]` of a range sensor's message, checked.
-fn limits(f: &Fields<'_>, min: &str, max: &str) -> Result<(f64, f64), BagError> {
-    let (lo, hi) = (f.number(f.value, min)?, f.number(f.value, max)?);
-    if !(lo >= 0.0 && hi > lo && hi <= MAX_RANGE_LIMIT) {
-        return Err(f.error(
-            max,
-            format!("range limits [{lo}, {hi}] m: need 0 <= min < max <= {MAX_RANGE_LIMIT}"),
-        ));
-    }
-    Ok((lo, hi))
-}
-
-/// Beam sensor `id` at the robot's centre (until its mount is known):
-/// `count` beams from `angle_0` by `angle_step` (rad), ranges within
-/// `limits` (m).
-fn centred(id: u32, limits: (f64, f64), angle_0: f64, angle_step: f64, count: u32) -> BeamSensor {
-    BeamSensor {
-        id,
-        mount: SensorMount {
-            x: 0.0,
-            y: 0.0,
-            yaw: 0.0,
-        },
-        min_range: limits.0,
-        max_range: limits.1,
-        angle_0,
-        angle_step,
-        count,
-    }
-}
-
-/// A `sensor_msgs/msg/LaserScan` as beam sensor `id` (at the robot's
-/// centre until its mount is known) and its ranges.
-fn scan(f: &Fields<'_>, id: u32) -> Result<(BeamSensor, Vec<f64>), BagError> {
-    let (min_range, max_range) = limits(f, "range_min", "range_max")?;
-    let ranges = f
-        .at(f.value, "ranges")?
-        .as_list()
-        .ok_or_else(|| f.error("ranges", "not a list"))?;
-    let count = u32::try_from(ranges.len())
-        .ok()
-        .filter(|&n| (1..=MAX_BEAMS).contains(&n))
-        .ok_or_else(|| {
-            f.error(
-                "ranges",
-                format!("{} ranges: need 1 to {MAX_BEAMS}", ranges.len()),
-            )
-        })?;
-    let sensor = centred(
-        id,
-        (min_range, max_range),
-        f.number(f.value, "angle_min")?,
-        f.number(f.value, "angle_increment")?,
-        count,
-    );
-    let values = ranges
-        .iter()
-        .map(|r| r.as_f64().ok_or_else(|| f.error("ranges", "not numbers")))
-        .collect::<Result<_, _>>()?;
-    Ok((sensor, values))
-}
-
-/// A `sensor_msgs/msg/Range` as one-beam sensor `id` and its range.
-fn range(f: &Fields<'_>, id: u32) -> Result<(BeamSensor, Vec<f64>), BagError> {
-    let (min_range, max_range) = limits(f, "min_range", "max_range")?;
-    let sensor = centred(id, (min_range, max_range), 0.0, 0.0, 1);
-    Ok((sensor, vec![f.number(f.value, "range")?]))
-}
-
-/// A proposed mapping for the decodable `topics` of a bag ([`topics`]):
-/// the first velocity-like topic, the first pose-like topic whose name
-/// says truth (`mocap`, `truth`, `ground`, `vicon`, `optitrack`), each
-/// `LaserScan` and `Range` topic (with an empty `map`), and the first topic
-/// of a type with `id` and `range` fields as the landmark sightings.
-///
-/// [`topics`]: crate::topics
-#[must_use]
-pub fn propose(topics: &[Topic]) -> String {
-    let decodable: Vec<&Topic> = topics.iter().filter(|t| t.undecodable.is_none()).collect();
-    let find = |pick: &dyn Fn(&Topic) -> bool| decodable.iter().copied().find(|t| pick(t));
-    let mut out = String::new();
-    let velocity =
-        find(&|t| t.type_name.ends_with("/Twist") || t.type_name.ends_with("/TwistStamped"))
-            .or_else(|| find(&|t| Defaults::velocity(&t.type_name).is_some()));
-    match velocity {
-        Some(t) => out.push_str(&format!("[velocity]\ntopic = \"{}\"  # {}\n", t.topic, t.type_name)),
-        None => out.push_str("# no velocity topic found (Twist, TwistStamped or Odometry): set one\n[velocity]\ntopic = \"\"\n"),
-    }
-    let truthy = ["mocap", "truth", "ground", "vicon", "optitrack"];
-    if let Some(t) = find(&|t| {
-        Defaults::pose(&t.type_name).is_some()
-            && truthy.iter().any(|w| t.topic.to_lowercase().contains(w))
-    }) {
-        out.push_str(&format!(
-            "\n[truth]\ntopic = \"{}\"  # {}\n",
-            t.topic, t.type_name
-        ));
-    }
-    let mut beams = false;
-    for t in &decodable {
-        let table = match t.type_name.as_str() {
-            "sensor_msgs/msg/LaserScan" => "[[scan]]",
-            "sensor_msgs/msg/Range" => "[[range]]",
-            _ => continue,
-        };
-        beams = true;
-        out.push_str(&format!("\n{table}\ntopic = \"{}\"\n", t.topic));
-    }
-    if beams {
-        out.insert_str(0, "map = \"\"  # the map the ranges are corrected against (docs/maps.md), relative to this file\n\n");
-    }
-    let has = |t: &Topic, name: &str| t.fields.iter().any(|f| f == name);
-    if let Some(t) = find(&|t| has(t, "id") && has(t, "range")) {
-        out.push_str(&format!(
-            "\n[landmarks]\ntopic = \"{}\"  # {}\n\n# the landmark map: one entry per landmark\n# [[landmark]]\n# id = 1\n# x = 0.0\n# y = 0.0\n",
-            t.topic, t.type_name
-        ));
-    }
-    out
 }
 
 #[cfg(test)]

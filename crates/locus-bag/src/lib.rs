@@ -26,6 +26,7 @@ pub mod error;
 pub mod mapping;
 pub mod msgdef;
 pub mod project;
+pub mod propose;
 pub mod value;
 
 pub use bag::{Channel, RECORD_LIMIT, RawMessage, Topic, read, topics};

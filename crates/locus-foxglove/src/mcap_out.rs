@@ -13,6 +13,14 @@ use crate::Error;
 use crate::encode::Message;
 use crate::topic::{MESSAGE_ENCODING, SCHEMA_ENCODING, Topic};
 
+/// The error of the MCAP writer on the file `path`.
+fn failed(path: &Path) -> impl FnOnce(mcap::McapError) -> Error + '_ {
+    move |source| Error::Mcap {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
 /// An MCAP file being written.
 pub struct McapOut {
     writer: mcap::Writer<BufWriter<File>>,
@@ -50,10 +58,7 @@ impl McapOut {
         let writer = mcap::WriteOptions::new()
             .library(concat!("locus ", env!("CARGO_PKG_VERSION")))
             .create(BufWriter::new(file))
-            .map_err(|source| Error::Mcap {
-                path: partial.clone(),
-                source,
-            })?;
+            .map_err(failed(&partial))?;
         Ok(Self {
             writer,
             path: path.to_path_buf(),
@@ -68,21 +73,14 @@ impl McapOut {
             return Ok(id);
         }
         let schema = topic.schema();
-        let mcap = |source| Error::Mcap {
-            path: self.partial.clone(),
-            source,
-        };
         let schema_id = self
             .writer
             .add_schema(schema.name, SCHEMA_ENCODING, schema.data.as_bytes())
-            .map_err(mcap)?;
+            .map_err(failed(&self.partial))?;
         let id = self
             .writer
             .add_channel(schema_id, topic.name(), MESSAGE_ENCODING, &BTreeMap::new())
-            .map_err(|source| Error::Mcap {
-                path: self.partial.clone(),
-                source,
-            })?;
+            .map_err(failed(&self.partial))?;
         self.channels[topic.index()] = Some(id);
         Ok(id)
     }
@@ -106,10 +104,7 @@ impl McapOut {
         *count += 1;
         self.writer
             .write_to_known_channel(&header, &m.payload)
-            .map_err(|source| Error::Mcap {
-                path: self.partial.clone(),
-                source,
-            })
+            .map_err(failed(&self.partial))
     }
 
     /// Writes each of `messages`.
@@ -125,10 +120,7 @@ impl McapOut {
     /// # Errors
     /// The file cannot be finished or renamed.
     pub fn finish(mut self) -> Result<Written, Error> {
-        self.writer.finish().map_err(|source| Error::Mcap {
-            path: self.partial.clone(),
-            source,
-        })?;
+        self.writer.finish().map_err(failed(&self.partial))?;
         drop(self.writer);
         std::fs::rename(&self.partial, &self.path).map_err(|source| Error::Io {
             what: "renaming",

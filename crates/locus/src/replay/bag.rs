@@ -42,6 +42,6 @@ pub fn list(file: &Path) -> Result<String> {
         "{}: {} topics, {messages} messages\n{t}\n\nA mapping to start from (save it, complete it, and pass it with --topics; docs/bags.md):\n\n{}",
         file.display(),
         topics.len(),
-        locus_bag::convert::propose(&topics)
+        locus_bag::propose::propose(&topics)
     ))
 }
