@@ -452,12 +452,12 @@ where
     };
 
     let mut text = summary_text(args, info, &summary);
-    if let Some(rec) = recorder {
-        let written = rec.finish(&text, "locus run")?;
-        text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
-        text.push_str(&crate::foxglove::written(&written));
-    } else {
-        text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
+    let mcap = recorder
+        .map(|rec| rec.finish(&text, "locus run"))
+        .transpose()?;
+    text.push_str(&files_written(&csv_path, &metrics_path, &pictures, out));
+    if let Some(w) = &mcap {
+        text.push_str(&crate::foxglove::written(w));
     }
     print_out(&text)
 }
