@@ -2,7 +2,8 @@
 # Runs every test of Locus, and first installs what the tests need when it is
 # missing: rustfmt/clippy, the thumbv7em-none-eabihf target (the core must
 # build for a Cortex-M4F), and the pinned Python packages of the filterpy
-# cross-check (scripts/requirements-crosscheck.txt).
+# cross-check (scripts/requirements-crosscheck.txt) and of the Python
+# package's tests (python/requirements-test.txt: pytest, Dask, nbclient).
 # The firmware (firmware/, its own workspace) also needs qemu-system-arm
 # (Debian's package; installed with apt-get when missing) and rustup's
 # llvm-tools (llvm-nm for the footprint).
@@ -48,16 +49,18 @@ if ! command -v iverilog >/dev/null 2>&1 || ! command -v verilator >/dev/null 2>
   $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y iverilog verilator
 fi
 
-step "python: filterpy cross-check requirements"
+step "python: the filterpy cross-check's and the Python package's test requirements"
 PY=${LOCUS_PYTHON:-python3}
-if ! "$PY" - <<'PYEOF' 2>/dev/null
-import importlib.metadata as m, pathlib, sys
-want = [l.split("==") for l in pathlib.Path("scripts/requirements-crosscheck.txt").read_text().split() if "==" in l]
+for req in scripts/requirements-crosscheck.txt python/requirements-test.txt; do
+  if ! REQ="$req" "$PY" - <<'PYEOF' 2>/dev/null
+import importlib.metadata as m, os, pathlib, sys
+want = [l.split("==") for l in pathlib.Path(os.environ["REQ"]).read_text().split() if "==" in l]
 sys.exit(0 if all(m.version(n) == v for n, v in want) else 1)
 PYEOF
-then
-  "$PY" -m pip install --quiet -r scripts/requirements-crosscheck.txt
-fi
+  then
+    "$PY" -m pip install --quiet -r "$req"
+  fi
+done
 
 step "browser: chromium and chromium-driver (teaching UI end-to-end tests)"
 if [ ! -x /usr/bin/chromium ] || [ ! -x /usr/bin/chromedriver ]; then

@@ -20,6 +20,48 @@ use crate::Summary;
 /// It changes when a key is renamed, moved or removed.
 pub const SCHEMA: &str = "locus-metrics/2";
 
+/// Where a `metrics.json` came from: its `"source"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Source {
+    /// One run of a simulated scenario.
+    Simulation,
+    /// A simulated scenario over several seeds.
+    MonteCarlo,
+    /// A recorded log replayed.
+    Replay,
+}
+
+/// The whole of a `metrics.json`: the [`SCHEMA`] tag, the source, the
+/// scenario or log name, the results `R` (a
+/// [`Results`], or their Monte
+/// Carlo spreads) and the source's own section `S`.
+#[derive(Serialize)]
+pub struct Metrics<'a, R: Serialize, S: Serialize> {
+    schema: &'static str,
+    source: Source,
+    /// Scenario or log name.
+    scenario: &'a str,
+    #[serde(flatten)]
+    results: R,
+    #[serde(flatten)]
+    section: S,
+}
+
+impl<'a, R: Serialize, S: Serialize> Metrics<'a, R, S> {
+    /// The metrics of `scenario` from `source`: `results`, then `section`
+    /// (a struct whose one field names the source's section).
+    pub fn new(source: Source, scenario: &'a str, results: R, section: S) -> Self {
+        Self {
+            schema: SCHEMA,
+            source,
+            scenario,
+            results,
+            section,
+        }
+    }
+}
+
 /// One estimator's figures against the ground truth (the filter's or the
 /// smoother's): errors in SI units, the NEES and the shares of steps
 /// inside the estimator's own 3 sigma. Errors are truth minus estimate,

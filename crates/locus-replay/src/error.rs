@@ -48,6 +48,13 @@ pub enum Error {
         /// Its arrival time, s.
         arrival: f64,
     },
+    /// The caller asked the replay to stop (a user's interrupt), before
+    /// the event of this index.
+    #[error("stopped before event {before}, as asked")]
+    Stopped {
+        /// Index of the first event not replayed.
+        before: usize,
+    },
     /// A configuration value is out of its valid range.
     #[error("invalid configuration: {0}")]
     InvalidConfig(&'static str),

@@ -67,6 +67,31 @@ pub fn replay_in_segments(
     log: &Log,
     cfg: &Config,
     segment: usize,
+    sink: impl FnMut(&Step),
+) -> Result<Report, Error> {
+    run(log, cfg, segment, || false, sink)
+}
+
+/// [`replay`], asking `stop` before each event of the forward pass whether
+/// to stop there (a user's interrupt, polled: `stop` should be cheap).
+///
+/// # Errors
+/// As [`replay`], and [`Error::Stopped`] when `stop` said so.
+pub fn replay_until(
+    log: &Log,
+    cfg: &Config,
+    stop: impl FnMut() -> bool,
+    sink: impl FnMut(&Step),
+) -> Result<Report, Error> {
+    let events = log.odometry.len() + log.sightings.len() + log.scans.len();
+    run(log, cfg, smoothing_segment(events), stop, sink)
+}
+
+fn run(
+    log: &Log,
+    cfg: &Config,
+    segment: usize,
+    mut stop: impl FnMut() -> bool,
     mut sink: impl FnMut(&Step),
 ) -> Result<Report, Error> {
     let mut engine = Engine::new(log, cfg, segment)?;
@@ -84,6 +109,11 @@ pub fn replay_in_segments(
             && engine.next_index >= c.next_index.saturating_add(segment)
         {
             checkpoints.push(engine.checkpoint());
+        }
+        if stop() {
+            return Err(Error::Stopped {
+                before: engine.next_index,
+            });
         }
         let more = engine.advance()?;
         if !cfg.smooth {

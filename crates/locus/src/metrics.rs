@@ -1,7 +1,7 @@
 //! `metrics.json`, written by `locus run` (one run or a Monte Carlo) and
 //! `locus replay` through serde (`serde_json`), in the one schema of
 //! [`locus_eval::results`] (`docs/metrics.schema.json`, `docs/results.md`):
-//! the [`SCHEMA`] tag, the source and its name, the source-neutral
+//! the [`SCHEMA`](locus_eval::results::SCHEMA) tag, the source and its name, the source-neutral
 //! [`Results`](locus_eval::results::Results), then the section of the source (`simulation`,
 //! `monte_carlo`, `replay`). Figures in SI units under keys that name the
 //! unit; a figure that cannot be computed (NaN) is `null`, never 0.
@@ -15,52 +15,11 @@ use std::io;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use locus_eval::results::SCHEMA;
 use serde::Serialize;
 
 use crate::run::Info;
 
-/// Where a `metrics.json` came from: its `"source"`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Source {
-    /// One run of a simulated scenario.
-    Simulation,
-    /// A simulated scenario over several seeds.
-    MonteCarlo,
-    /// A recorded log replayed.
-    Replay,
-}
-
-/// The whole of a `metrics.json`: the [`SCHEMA`] tag, the source, the
-/// scenario or log name, the results `R` (a
-/// [`Results`](locus_eval::results::Results), or their Monte
-/// Carlo spreads) and the source's own section `S`.
-#[derive(Serialize)]
-pub struct Metrics<'a, R: Serialize, S: Serialize> {
-    schema: &'static str,
-    source: Source,
-    /// Scenario or log name.
-    scenario: &'a str,
-    #[serde(flatten)]
-    results: R,
-    #[serde(flatten)]
-    section: S,
-}
-
-impl<'a, R: Serialize, S: Serialize> Metrics<'a, R, S> {
-    /// The metrics of `scenario` from `source`: `results`, then `section`
-    /// (a struct whose one field names the source's section).
-    pub fn new(source: Source, scenario: &'a str, results: R, section: S) -> Self {
-        Self {
-            schema: SCHEMA,
-            source,
-            scenario,
-            results,
-            section,
-        }
-    }
-}
+pub use locus_eval::results::{Metrics, Source};
 
 /// The `simulation` section of a `metrics.json`: the scenario's settings
 /// (and of one run, its seed and laps completed).

@@ -1,6 +1,6 @@
 //! The flags of `locus replay` (its sources, [`Source`], and the replay's
-//! options, [`Flags`]) and the settings they give ([`Flags::config`],
-//! [`Flags::overrides`]); `locus tune` and `locus family` replay with the
+//! options, [`Flags`]) and the settings they give ([`Flags::options`],
+//! a [`locus_replay::Options`]); `locus tune` and `locus family` replay with the
 //! flags' defaults ([`default_config`]).
 
 use std::path::PathBuf;
@@ -10,8 +10,8 @@ use clap::{Args as ClapArgs, Subcommand};
 use locus_logs::mrclam::Dataset;
 use locus_models::plausible::Limits;
 use locus_replay::log::SharedMap;
-use locus_replay::policy::{Estimation, Overrides};
-use locus_replay::{Config, GaussMarkov, Log, Start};
+use locus_replay::policy::Estimation;
+use locus_replay::{Config, GaussMarkov, Log, Options};
 
 use crate::plot::PictureArgs;
 use crate::replay::relations::Reference;
@@ -422,53 +422,25 @@ pub struct Flags {
 }
 
 impl Flags {
-    /// The replay's settings other than the noise and the odometry delay
-    /// (settled by `locus_replay::policy`).
-    pub fn config(&self) -> Config {
-        let defaults = Config::default();
-        let mut calibration = locus_replay::Calibration {
-            initial: [self.v_scale, self.omega_scale, 0.0, 0.0],
-            ..locus_replay::Calibration::default()
-        };
-        let mut beams = locus_replay::Beams {
-            per_scan: self.beams_per_scan,
-            ..locus_replay::Beams::default()
-        };
-        if self.hold_calibration {
-            calibration.std = [HELD_STD; 4];
-            calibration.walk = [0.0; 4];
-            beams.bias = GaussMarkov {
-                sigma: HELD_STD,
-                tau: f64::INFINITY,
-            };
-        }
-        let initial_std = self.initial_std.unwrap_or(defaults.initial_std);
-        Config {
+    /// The replay's settings as the flags give them.
+    pub fn options(&self) -> Options {
+        Options {
             gate: (!self.no_gate).then_some(self.gate),
             robust_dof: (!self.no_robust).then_some(self.robust_dof),
             smooth: self.smooth,
-            start: if self.start_from_sightings {
-                Start::Sightings
-            } else {
-                Start::Log
-            },
-            calibration,
-            beams,
-            initial_std,
+            start_from_sightings: self.start_from_sightings,
+            v_scale: self.v_scale,
+            omega_scale: self.omega_scale,
+            hold_calibration: self.hold_calibration,
+            initial_std: self.initial_std,
+            start: self.start,
+            beams_per_scan: self.beams_per_scan,
             limits: Limits {
                 max_speed: self.max_speed,
                 max_turn_rate: self.max_turn_rate,
                 max_odometry_gap: self.max_odometry_gap,
                 ..Limits::GENERIC
             },
-            ..defaults
-        }
-    }
-
-    /// What the flags settle of the noise and the odometry delay, and what
-    /// they leave for `locus_replay::policy` to estimate.
-    pub fn overrides(&self) -> Overrides {
-        Overrides {
             noise: locus_replay::log::NoiseRecords {
                 q_v: self.q_v,
                 q_omega: self.q_omega,
@@ -488,6 +460,7 @@ impl Flags {
             } else {
                 Estimation::Noise
             },
+            truth_offset: self.truth_offset,
         }
     }
 }
@@ -516,13 +489,6 @@ fn three(text: &str, parse: fn(&str) -> Result<f64, String>) -> Result<[f64; 3],
     })
 }
 
-/// The standard deviation of a calibration state held by
-/// `--hold-calibration` (in the state's unit): small enough that the
-/// covariance it leaves is below rounding against the pose's (a turn-rate
-/// bias of 1e-6 rad/s, the default's held value, grows a heading
-/// uncertainty of 1.6e-4 rad over 160 s; one of 1e-12, 1.6e-10 rad).
-pub const HELD_STD: f64 = 1e-12;
-
 /// The replay's settings other than the noise and the odometry delay for
 /// `locus replay csv FILE` with no flags (the flags' defaults, parsed as
 /// the command parses them), for benchmarks that must replay as the
@@ -535,5 +501,25 @@ pub fn default_config() -> Config {
     }
     <NoFlags as clap::Parser>::parse_from(["replay"])
         .common
+        .options()
         .config()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(clap::Parser)]
+    struct NoFlags {
+        #[command(flatten)]
+        common: Flags,
+    }
+
+    /// `locus replay` with no flags replays as the library's (and the
+    /// Python package's) default options do.
+    #[test]
+    fn no_flags_are_the_default_options() {
+        let flags = <NoFlags as clap::Parser>::parse_from(["replay"]).common;
+        assert_eq!(flags.options(), Options::default());
+    }
 }

@@ -19,9 +19,9 @@ use anyhow::{Context, Result};
 use comfy_table::Table;
 use locus_eval::Sample;
 use locus_eval::results::{Calibration, Results};
-use locus_replay::policy::{Settled, settle};
+use locus_replay::policy::Settled;
 use locus_replay::results::Section;
-use locus_replay::{Log, Report, csv_out::replay_to_csv};
+use locus_replay::{Log, Prepared, Report, csv_out::replay_to_csv, prepare};
 
 use crate::args::replay::{Flags, Source};
 use crate::metrics::{self, Metrics};
@@ -53,34 +53,23 @@ pub fn run(args: &Args) -> Result<()> {
         return Ok(());
     }
     let mut loaded = args.source.read()?;
-    if let Some([x, y, theta]) = loaded.flags.start {
-        let t0 = loaded.log.odometry.first().map_or(0.0, |o| o.time);
-        loaded.log.start = Some(locus_logs::mrclam::TruthPose {
-            time: t0,
-            x,
-            y,
-            theta,
-        });
-    }
-    let clock = locus_replay::truth_clock::settle(
-        &mut loaded.log,
-        &loaded.flags.config(),
-        loaded.flags.truth_offset,
-    );
-    let (log, export, flags) = (&loaded.log, loaded.export, loaded.flags);
-    if let Some(path) = export {
-        fs::write(path, locus_logs::locus_csv::write(&log.to_locus()))
-            .with_context(|| format!("writing {}", path.display()))?;
-    }
+    let options = loaded.flags.options();
     // The noise search replays the log hundreds of times: minutes on a
     // long log of scans.
     let searching = crate::output::spinner(
         "settling the noise and the odometry delay from the log, {elapsed} elapsed",
     )?;
-    let settled = settle(log, &flags.config(), &flags.overrides())
-        .with_context(|| format!("settling the noise of {}", log.name));
+    let prepared = prepare(&mut loaded.log, &options)
+        .with_context(|| format!("settling the noise of {}", loaded.log.name));
     searching.finish_and_clear();
-    let settled = settled?;
+    let Prepared { settled, clock } = prepared?;
+    let (log, flags) = (&loaded.log, loaded.flags);
+    if let Some(path) = loaded.export {
+        // The log as replayed: with the start given and the truth on the
+        // sensors' clock.
+        fs::write(path, locus_logs::locus_csv::write(&log.to_locus()))
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
     let slug: String = log
         .name
         .chars()
