@@ -23,3 +23,10 @@ def locus_bin() -> pathlib.Path:
     path = pathlib.Path(os.environ.get("LOCUS_BIN", ROOT / "target" / "release" / "locus"))
     assert path.is_file(), f"{path} is missing: build it (cargo test --workspace builds it) or set LOCUS_BIN"
     return path
+
+
+@pytest.fixture(scope="session")
+def laser_wall() -> pathlib.Path:
+    path = SHARED / "data" / "laser_wall_1d" / "dataset1.txt"
+    assert path.is_file(), f"{path} is missing (the shared data beside the repository)"
+    return path

@@ -1,6 +1,8 @@
 """locus.replay: the engine and defaults of `locus replay`, numpy out."""
 
+import pathlib
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -121,6 +123,50 @@ def test_arrays_replay_as_the_same_log_written_as_csv(tmp_path):
     df = a.to_pandas()
     assert list(df["event"].unique()) == ["odometry", "sighting"]
     assert df["x_m"].to_numpy().tolist() == a.poses[:, 0].tolist()
+
+
+def test_a_bag_whose_mapping_names_a_map_replays_against_it(laser_wall, locus_bin, tmp_path):
+    """Paper 000's laser to a wall as a bag whose mapping names a walls file:
+    the map is loaded, as `locus replay bag` loads it."""
+    exported = tmp_path / "export.csv"
+    subprocess.run([locus_bin, "replay", "laser-wall", laser_wall, "--export", exported,
+                    "--no-estimate", "--q-v", "1e-4", "--q-omega", "1e-4", "--sigma-beam", "0.01",
+                    "--no-plots", "--out", tmp_path / "exported"], check=True, capture_output=True)
+    lines = exported.read_text().splitlines()
+    walls = [l.split(",")[1:] for l in lines if l.startswith("wall,")]
+    assert walls
+    (tmp_path / "walls.txt").write_text("".join(" ".join(w) + "\n" for w in walls))
+    kept = [l for l in lines if not l.startswith(("wall,", "start,"))]
+    csv = tmp_path / "wall.csv"
+    csv.write_text("map,walls.txt\n" + "\n".join(kept) + "\n")
+    mapping = tmp_path / "wall.toml"
+    root = pathlib.Path(__file__).resolve().parents[2]
+    subprocess.run([sys.executable, root / "scripts" / "locus_csv_to_bag.py", csv,
+                    tmp_path / "wall-bag", mapping], check=True, capture_output=True)
+    assert "walls.txt" in mapping.read_text()
+    bag = tmp_path / "wall-bag" / "wall-bag.mcap"
+
+    kw = dict(q_v=1e-4, q_omega=1e-4, sigma_beam=0.01, estimate="nothing",
+              start=[0.9844566829712001, 0.0, 0.0])
+    out = tmp_path / "cli"
+    said = subprocess.run([locus_bin, "replay", "bag", bag, "--topics", mapping, "--no-estimate",
+                           "--q-v", "1e-4", "--q-omega", "1e-4", "--sigma-beam", "0.01",
+                           "--start", "0.9844566829712001,0,0", "--no-plots", "--out", out],
+                          check=True, capture_output=True, text=True).stdout
+    assert "scans / beams in them" in said
+    cli = read_log_csv(out / "log.csv")
+    r = locus.replay(bag, topics=mapping, **kw)
+    assert len(r.times) == len(cli["time_s"])
+    np.testing.assert_allclose(r.poses[:, 0], cli["x_m"], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(r.covariances[:, 0, 0], cli["var_x_m2"], rtol=0, atol=1e-12)
+    # The beams corrected the estimate against the map: 6.7 mm, where the
+    # odometry alone drifts to 0.28 m.
+    assert r.metrics["counts"]["applied"] > 10000
+    assert r.metrics["filter"]["position_rmse_m"] < 0.02 < r.metrics["odometry"]["position_rmse_m"]
+    # A mapping whose map file is missing is an error naming it.
+    (tmp_path / "walls.txt").unlink()
+    with pytest.raises(locus.LocusError, match="walls.txt"):
+        locus.replay(bag, topics=mapping, **kw)
 
 
 def test_smooth_gives_the_smoothed_track(mrclam6):

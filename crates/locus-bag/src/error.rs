@@ -90,6 +90,11 @@ pub enum BagError {
         /// The topic, its type, the field and what is wrong.
         problem: Box<FieldProblem>,
     },
+    /// A mapping file that does not parse, or has another shape (an
+    /// unknown key, a missing `velocity`): the file, the line and the
+    /// parser's message ([`Mapping::from_toml`](crate::Mapping::from_toml)).
+    #[error("{0}")]
+    MappingFile(String),
     /// A mapping that does not fit the bag: a topic it does not have, a
     /// frame `/tf_static` does not reach.
     #[error("{file}: {key}: {reason}")]

@@ -12,7 +12,8 @@
 //! * [`mapping`] and [`convert`]: which topics and fields are the
 //!   velocities, the landmark sightings and the truth (a small TOML file),
 //!   and the bag read as a Locus log by it ([`convert::to_locus`]), the
-//!   sensor's mount from `/tf_static`.
+//!   sensor's mount from `/tf_static`; [`read_log`] reads the mapping
+//!   file too, and resolves the map file it names.
 //!
 //! Every error names where: the file, the record, the topic, the schema's
 //! line, the field and its byte offset ([`BagError`]).
@@ -25,6 +26,7 @@ pub mod convert;
 pub mod error;
 pub mod mapping;
 pub mod msgdef;
+pub mod open;
 pub mod project;
 pub mod propose;
 pub mod value;
@@ -33,4 +35,5 @@ pub use bag::{Channel, RECORD_LIMIT, RawMessage, Topic, read, topics};
 pub use error::{BagError, CdrError, FieldProblem, SchemaError};
 pub use mapping::Mapping;
 pub use msgdef::Definitions;
+pub use open::read_log;
 pub use value::{Message, Value};

@@ -459,3 +459,62 @@ fn later_messages_of_a_mapped_topic_read_alike_and_fail_alike() {
         "{e}"
     );
 }
+
+#[test]
+fn a_mapping_file_names_its_map_relative_to_itself() {
+    let dir = scratch("read_log");
+    let twist = |speed: f64, turn: f64| {
+        let mut b = vec![0, 1, 0, 0];
+        for x in [speed, 0.0, 0.0, 0.0, 0.0, turn] {
+            b.extend_from_slice(&x.to_le_bytes());
+        }
+        b
+    };
+    let schema = "geometry_msgs/Vector3 linear\ngeometry_msgs/Vector3 angular\n\
+        ===\nMSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n";
+    let bag = dir.join("run.mcap");
+    write_bag(
+        &bag,
+        "geometry_msgs/msg/Twist",
+        schema,
+        "cdr",
+        &[twist(0.1, 0.0), twist(0.2, -0.1)],
+    );
+    let robot = dir.join("robot");
+    std::fs::create_dir_all(&robot).unwrap();
+    let mapping = robot.join("mapping.toml");
+    let velocity = "[velocity]\ntopic = \"/odom\"\n";
+
+    std::fs::write(&mapping, format!("map = \"maps/lab.txt\"\n{velocity}")).unwrap();
+    let log = locus_bag::read_log(&bag, &mapping).unwrap();
+    assert_eq!(log.odometry.len(), 2);
+    assert_eq!(
+        Path::new(log.map.as_ref().unwrap().as_str()),
+        robot.join("maps/lab.txt")
+    );
+
+    std::fs::write(&mapping, velocity).unwrap();
+    assert!(locus_bag::read_log(&bag, &mapping).unwrap().map.is_none());
+
+    let both =
+        format!("map = \"lab.txt\"\n{velocity}[[wall]]\nx1 = 0.0\ny1 = 0.0\nx2 = 1.0\ny2 = 0.0\n");
+    std::fs::write(&mapping, both).unwrap();
+    let e = locus_bag::read_log(&bag, &mapping).unwrap_err().to_string();
+    assert!(
+        e.contains("mapping.toml: map: give the map as `map` or as [[wall]] entries, not both"),
+        "{e}"
+    );
+
+    std::fs::write(&mapping, format!("map = \"a,b.txt\"\n{velocity}")).unwrap();
+    let e = locus_bag::read_log(&bag, &mapping).unwrap_err().to_string();
+    assert!(e.contains("mapping.toml: map: a map path must not"), "{e}");
+
+    std::fs::write(&mapping, format!("{velocity}topics = 3\n")).unwrap();
+    let e = locus_bag::read_log(&bag, &mapping).unwrap_err().to_string();
+    assert!(e.contains("mapping.toml:3:"), "{e}");
+
+    let missing = robot.join("none.toml");
+    let e = locus_bag::read_log(&bag, &missing).unwrap_err().to_string();
+    assert!(e.contains("none.toml"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -48,7 +48,7 @@ pub use config::{
     DoaConfig, GeometryConfig, GridConfig, MAX_CONFIG_BYTES, MAX_GRID_CELLS, MAX_RUN_STEPS,
     MAX_SEARCH_STEPS, NoiseConfig, RunConfig, SearchConfig,
 };
-pub use shards::{DoaResult, Shard, merge};
+pub use shards::{DoaResult, Shard, merge, merge_csv};
 pub use study::{
     Cell, CellResult, Divergence, MZeta, RunOutcome, SettleTracker, Study, VERTICES, search_m_zeta,
     vertex,

@@ -308,6 +308,38 @@ fn check_cell(
     Ok(())
 }
 
+/// The whole grid from the CSV texts of all its shards, each given with
+/// the name its errors use (`locus doa merge`, `locus.doa`): each parsed
+/// ([`DoaResult::from_csv`], or [`DoaResult::from_csv_of`] the study
+/// `config` when given, with the name of its file), then [`merge`]d, and
+/// the merged configuration hash checked against `config`'s.
+///
+/// # Errors
+/// A shard that does not parse or does not fit the configuration's grid
+/// (its name, line and field); shards that do not merge ([`merge`]);
+/// shards of another configuration than `config`.
+pub fn merge_csv<'a>(
+    shards: impl IntoIterator<Item = (&'a str, &'a str)>,
+    config: Option<(&DoaConfig, &str)>,
+) -> Result<DoaResult, DoaError> {
+    let parts = shards
+        .into_iter()
+        .map(|(name, text)| match config {
+            Some((c, _)) => DoaResult::from_csv_of(text, name, c),
+            None => DoaResult::from_csv(text, name),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let merged = merge(parts)?;
+    if let Some((c, name)) = config
+        && c.hash() != merged.config_hash
+    {
+        return Err(DoaError::Merge(format!(
+            "the shards were computed with another configuration than {name}"
+        )));
+    }
+    Ok(merged)
+}
+
 /// Joins shards into the whole grid: every part must have the same
 /// configuration hash and grid, and together they must hold every cell
 /// exactly once. The result equals the unsharded sweep.

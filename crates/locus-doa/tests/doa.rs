@@ -4,7 +4,7 @@
 
 use locus_doa::{
     Cell, Divergence, DoaConfig, DoaError, DoaResult, RunOutcome, SearchConfig, SettleTracker,
-    Shard, Study, merge, search_m_zeta, vertex,
+    Shard, Study, merge, merge_csv, search_m_zeta, vertex,
 };
 
 fn study() -> Study {
@@ -211,6 +211,48 @@ fn merged_shards_equal_the_unsharded_sweep_exactly() {
     let mut other = parts.clone();
     other[2].config_hash ^= 1;
     assert!(matches!(merge(other), Err(DoaError::Merge(_))));
+}
+
+/// What `locus doa merge` and `locus.doa` join: shard CSVs, checked
+/// against the configuration when it is given.
+#[test]
+fn shard_csvs_merge_checked_against_their_configuration() {
+    let config = small_config();
+    let study = Study::new(config.clone()).unwrap();
+    let whole = study.sweep(Shard::ALL, &|_| {});
+    let texts: Vec<(String, String)> = (0..3)
+        .map(|i| {
+            let part = study.sweep(Shard { index: i, count: 3 }, &|_| {});
+            (format!("part{i}.csv"), part.to_csv())
+        })
+        .collect();
+    let shards = || texts.iter().map(|(n, t)| (n.as_str(), t.as_str()));
+    assert_eq!(merge_csv(shards(), None).unwrap().to_csv(), whole.to_csv());
+    let given = merge_csv(shards(), Some((&config, "small.toml"))).unwrap();
+    assert_eq!(given.to_csv(), whole.to_csv());
+
+    // The same grid, another horizon: refused, naming the configuration.
+    let mut other = config.clone();
+    other.run.horizon = 2.0;
+    let e = merge_csv(shards(), Some((&other, "other.toml")))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("the shards were computed with another configuration than other.toml"),
+        "{e}"
+    );
+    // Another grid: refused, naming the shard.
+    let mut wider = config;
+    wider.grid.alpha_count = 4;
+    let e = merge_csv(shards(), Some((&wider, "wider.toml")))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("part0.csv"), "{e}");
+    // No shards.
+    assert!(matches!(
+        merge_csv(core::iter::empty(), None),
+        Err(DoaError::Merge(_))
+    ));
 }
 
 #[test]

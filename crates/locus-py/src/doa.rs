@@ -3,7 +3,7 @@
 //! computes, `locus doa --shard I/N`'s), and the merge of shards into the
 //! whole grid's CSV, byte for byte `locus doa`'s `doa.csv`.
 
-use locus_doa::{DoaConfig, DoaResult, Shard, Study, merge};
+use locus_doa::{DoaConfig, Shard, Study, merge_csv};
 use pyo3::prelude::*;
 
 use crate::error::{locus_error, value_error};
@@ -61,20 +61,14 @@ pub fn doa_merge(shards: Vec<String>, config: Option<String>, name: String) -> P
             .as_deref()
             .map(|t| DoaConfig::from_toml_str(t, &name))
             .transpose()?;
-        let mut parts = Vec::with_capacity(shards.len());
-        for (i, text) in shards.iter().enumerate() {
-            let file = format!("shard {i}");
-            parts.push(match &config {
-                Some(c) => DoaResult::from_csv_of(text, &file, c)?,
-                None => DoaResult::from_csv(text, &file)?,
-            });
-        }
-        let merged = merge(parts)?;
-        if let Some(c) = &config
-            && c.hash() != merged.config_hash
-        {
-            anyhow::bail!("the shards were computed with another configuration than {name}");
-        }
+        let names: Vec<String> = (0..shards.len()).map(|i| format!("shard {i}")).collect();
+        let merged = merge_csv(
+            names
+                .iter()
+                .map(String::as_str)
+                .zip(shards.iter().map(String::as_str)),
+            config.as_ref().map(|c| (c, name.as_str())),
+        )?;
         Ok(merged.to_csv())
     };
     run().map_err(|e| locus_error(&e))

@@ -69,19 +69,10 @@ fn read(
                 .or_else(|| locus_logs::librsf::sibling_truth(path));
             Log::librsf(path, truth.as_deref())?
         }
-        Format::Bag => {
-            let mapping_path = topics.context("topics=MAPPING.toml is needed to replay a bag")?;
-            let text = std::fs::read_to_string(mapping_path)
-                .with_context(|| format!("reading the mapping {}", mapping_path.display()))?;
-            let shown = mapping_path.display().to_string();
-            let mapping =
-                locus_bag::Mapping::from_toml(&text, &shown).map_err(anyhow::Error::msg)?;
-            let log = locus_bag::convert::to_locus(path, &mapping, &shown)?;
-            let name = path
-                .file_name()
-                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-            Log::from_locus(&name, log)?
-        }
+        Format::Bag => Log::bag(
+            path,
+            topics.context("topics=MAPPING.toml is needed to replay a bag")?,
+        )?,
     })
 }
 

@@ -68,6 +68,10 @@ pub enum Error {
     /// The log cannot be read (file, line and field named).
     #[error(transparent)]
     Read(#[from] locus_logs::Error),
+    /// The bag or its mapping cannot be read (file, record, topic and
+    /// field named). Boxed: a bag's error is large.
+    #[error(transparent)]
+    Bag(Box<locus_bag::BagError>),
     /// A record every sighting or the start depends on is implausible
     /// (`locus_models::plausible`).
     #[error("{file}:{}{what}: {why}", line.map_or_else(String::new, |l| format!("{l}: ")))]
@@ -102,6 +106,12 @@ pub enum Error {
         #[source]
         source: locus_core::Error,
     },
+}
+
+impl From<locus_bag::BagError> for Error {
+    fn from(e: locus_bag::BagError) -> Self {
+        Self::Bag(Box::new(e))
+    }
 }
 
 /// What [`Error::NoStart`] says the start came from: the sightings on

@@ -3,11 +3,12 @@
 //! received, optional ground truth and initial pose, the landmark sensor's
 //! mount and the noise levels the log declares; and for range sensors that
 //! see walls (version 4), the map of walls or grid, the beam sensors and
-//! their scans. Built from an MRCLAM dataset ([`Log::mrclam`]) or a Locus
-//! CSV log ([`Log::locus_csv`]).
+//! their scans. Built from an MRCLAM dataset ([`Log::mrclam`]), a Locus
+//! CSV log ([`Log::locus_csv`]), a libRSF log ([`Log::librsf`]) or a ROS 2
+//! bag ([`Log::bag`]).
 
 use alloc::sync::Arc;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 pub use locus_logs::MapPath;
 use locus_logs::locus_csv::{self, LocusLog};
@@ -477,13 +478,36 @@ impl Log {
     /// ([`Log::from_locus`]).
     pub fn locus_csv(path: &Path) -> Result<Self, Error> {
         let (log, lines, file) = locus_csv::read_with_lines(path)?;
-        let name = path
-            .file_name()
-            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
         let map_file = log.map.as_ref().map(|m| m.resolve(&file));
+        Self::with_map_file(&file_name(path), log, lines, map_file)
+    }
+
+    /// Reads a ROS 2 bag (MCAP) by the mapping in the TOML file
+    /// `mapping_file` ([`locus_bag::read_log`], docs/bags.md), with the map
+    /// file the mapping names.
+    ///
+    /// # Errors
+    /// The bag or the mapping cannot be read ([`Error::Bag`]: the file,
+    /// record, topic and field named); the map file cannot be loaded
+    /// ([`Error::Map`]); an implausible record ([`Log::from_locus`]).
+    pub fn bag(bag: &Path, mapping_file: &Path) -> Result<Self, Error> {
+        let log = locus_bag::read_log(bag, mapping_file)?;
+        // `read_log` resolved the map path against the mapping file.
+        let map_file = log.map.as_ref().map(|m| m.as_str().into());
+        Self::with_map_file(&file_name(bag), log, Lines::default(), map_file)
+    }
+
+    /// [`Log::from_locus_lines`] with the map loaded from `map_file` (the
+    /// log's `map` record resolved), which a log with walls must not have.
+    fn with_map_file(
+        name: &str,
+        log: LocusLog,
+        lines: Lines,
+        map_file: Option<PathBuf>,
+    ) -> Result<Self, Error> {
         let map_line = lines.map;
         let map_error = |reason: String| Error::Map {
-            file: name.clone(),
+            file: name.to_string(),
             line: map_line,
             reason,
         };
@@ -492,7 +516,7 @@ impl Log {
                 "the log gives both walls and a map file: give one".to_string(),
             ));
         }
-        let mut out = Self::from_locus_lines(&name, log, lines)?;
+        let mut out = Self::from_locus_lines(name, log, lines)?;
         if let Some(p) = map_file {
             let map = Map::load(&p).map_err(|e| map_error(e.to_string()))?;
             out.map = Some(SharedMap(Arc::new(map)));
@@ -511,10 +535,7 @@ impl Log {
     /// implausible record ([`Log::from_locus`]).
     pub fn librsf(input: &Path, truth: Option<&Path>) -> Result<Self, Error> {
         let read = locus_logs::librsf::read(input, truth)?;
-        let name = input
-            .file_name()
-            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-        Self::from_locus_lines(&name, read.log, read.lines)
+        Self::from_locus_lines(&file_name(input), read.log, read.lines)
     }
 
     /// The log as a Locus CSV log (measurements in arrival order), e.g. to
@@ -584,6 +605,12 @@ impl Log {
     pub fn landmark(&self, id: u32) -> Option<&Landmark> {
         self.landmarks.iter().find(|l| l.id == id)
     }
+}
+
+/// A log's name: its file's name (empty for a path that has none).
+fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
 }
 
 #[cfg(test)]

@@ -8,9 +8,9 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Context, Result};
 use clap::Subcommand;
-use locus_doa::{CellResult, DoaConfig, DoaResult, Shard, Study, merge};
+use locus_doa::{CellResult, DoaConfig, DoaResult, Shard, Study, merge_csv};
 use plotters::prelude::*;
 
 use crate::font::{self, FAMILY};
@@ -138,24 +138,16 @@ fn run_merge(args: &MergeArgs) -> Result<()> {
     // and the output directory.
     let config = args.config.as_deref().map(DoaConfig::load).transpose()?;
     crate::output::writable_dir(&args.out)?;
-    let mut parts = Vec::new();
+    let mut texts = Vec::with_capacity(args.inputs.len());
     for p in &args.inputs {
         let text = crate::output::read_bounded(p, MAX_SHARD_BYTES)?;
-        let name = p.display().to_string();
-        parts.push(match &config {
-            Some(c) => DoaResult::from_csv_of(&text, &name, c)?,
-            None => DoaResult::from_csv(&text, &name)?,
-        });
+        texts.push((p.display().to_string(), text));
     }
-    let merged = merge(parts)?;
-    if let (Some(config), Some(c)) = (&config, &args.config) {
-        if config.hash() != merged.config_hash {
-            return Err(anyhow!(
-                "the shards were computed with another configuration than {}",
-                c.display()
-            ));
-        }
-    }
+    let config_name = args.config.as_ref().map(|c| c.display().to_string());
+    let merged = merge_csv(
+        texts.iter().map(|(n, t)| (n.as_str(), t.as_str())),
+        config.as_ref().zip(config_name.as_deref()),
+    )?;
     let csv = args.out.join("doa.csv");
     std::fs::write(&csv, merged.to_csv()).with_context(|| format!("writing {}", csv.display()))?;
     println!(

@@ -223,34 +223,7 @@ impl Source {
                 let mapping_path = topics
                     .as_ref()
                     .context("--topics MAPPING.toml is needed to replay a bag")?;
-                let text = std::fs::read_to_string(mapping_path)
-                    .with_context(|| format!("reading the mapping {}", mapping_path.display()))?;
-                let shown = mapping_path.display().to_string();
-                let mapping =
-                    locus_bag::Mapping::from_toml(&text, &shown).map_err(anyhow::Error::msg)?;
-                let mut log = locus_bag::convert::to_locus(file, &mapping, &shown)?;
-                // The map file is relative to the mapping; the log keeps
-                // the resolved path (so an export names the same file).
-                let map = mapping.map.as_ref().map(|m| {
-                    mapping_path
-                        .parent()
-                        .unwrap_or_else(|| std::path::Path::new(""))
-                        .join(m)
-                });
-                if map.is_some() && !log.walls.is_empty() {
-                    anyhow::bail!(
-                        "{shown}: give the map as `map` or as [[wall]] entries, not both"
-                    );
-                }
-                log.map = map
-                    .as_ref()
-                    .and_then(|p| p.to_str())
-                    .and_then(locus_logs::wall::MapPath::new);
-                let mut log = Log::from_locus(&name(file), log)?;
-                if let Some(map) = map {
-                    log.map = Some(load_map(&map)?);
-                }
-                (log, export.as_ref(), common)
+                (Log::bag(file, mapping_path)?, export.as_ref(), common)
             }
             Self::Carmen {
                 file,
