@@ -6,8 +6,12 @@ Usage:
     pip install -r scripts/requirements-crosscheck.txt
     python3 scripts/python_speed.py [--steps 20000] [--rounds 7] [--locus target/release/locus]
 
-What it measures (best of --rounds interleaved rounds, so that the peers see
-the same machine state):
+What it measures: in each of --rounds rounds each peer runs --repeats times
+back to back (the first run warms the caches and branch predictors that the
+peer before it cooled), and each figure is the best run of all rounds. The
+peers take turns, so that they see the same machine state; the Rust floor is
+likewise the best of 7 back-to-back runs. `--repeats 1` gives the figures
+right after another peer has run.
 
 1. paper 001's EKF step (differential-drive predict, then the IR-pair wall
    correction when a reading arrived), the step of the Rust peer benchmark
@@ -104,6 +108,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--steps", type=int, default=20000)
     ap.add_argument("--rounds", type=int, default=7)
+    ap.add_argument("--repeats", type=int, default=3,
+                    help="back-to-back runs of each peer in a round (the first warms its caches)")
     ap.add_argument("--locus", default=str(ROOT / "target" / "release" / "locus"),
                     help="the command-line binary (cargo build --release -p locus)")
     ap.add_argument("--mrclam", default=str(ROOT.parent / "shared" / "data" / "mrclam" / "MRCLAM_Dataset6"))
@@ -171,9 +177,10 @@ def main():
     for _ in range(args.rounds):
         for name, fn in (("filterpy", run_filterpy), ("step", run_steps), ("run", run_batch),
                          ("run_into", run_batch_into)):
-            s = time.perf_counter()
-            fn()
-            t[name].append(time.perf_counter() - s)
+            for _ in range(args.repeats):
+                s = time.perf_counter()
+                fn()
+                t[name].append(time.perf_counter() - s)
     n = len(steps)
     per = {k: min(v) / n for k, v in t.items()}
     observed = sum(1 for s in steps if s[2])

@@ -374,9 +374,7 @@ impl Filter {
             sensor: self.sensor.as_ref(),
             ekf: &self.ekf,
             inputs: &inputs,
-            k,
             readings: readings.as_deref(),
-            m,
             targets: targets.as_deref(),
         };
         let mut belief = self.belief;
@@ -409,9 +407,7 @@ struct Steps<'a> {
     sensor: Option<&'a Sensor>,
     ekf: &'a Ekf<f64>,
     inputs: &'a [f64],
-    k: usize,
     readings: Option<&'a [f64]>,
-    m: usize,
     targets: Option<&'a [i64]>,
 }
 
@@ -426,6 +422,10 @@ struct Out<'a> {
 /// One correction of a batch run's loop: a trait (not a closure) so that
 /// the loop inlines it.
 trait Correct {
+    /// The reading's length (a constant for one sensor type, so that the
+    /// loop indexes with no checks).
+    fn dim(&self) -> usize;
+
     fn correct(
         &self,
         ekf: &Ekf<f64>,
@@ -440,6 +440,11 @@ struct Ir<'a>(&'a IrPairGeometry<f64>, f64, &'a [f64; 2]);
 
 impl Correct for Ir<'_> {
     #[inline(always)]
+    fn dim(&self) -> usize {
+        2
+    }
+
+    #[inline(always)]
     fn correct(
         &self,
         ekf: &Ekf<f64>,
@@ -452,6 +457,11 @@ impl Correct for Ir<'_> {
 }
 
 impl Correct for Sensor {
+    #[inline(always)]
+    fn dim(&self) -> usize {
+        Self::dim(self)
+    }
+
     #[inline(always)]
     fn correct(
         &self,
@@ -501,7 +511,10 @@ impl Steps<'_> {
         }
     }
 
-    /// The loop of a batch run over `range`.
+    /// The loop of a batch run over `range`. Inputs, readings and results
+    /// are walked by iterators (no index arithmetic, no bounds checks in
+    /// the loop), so that the belief and the output cursors stay in
+    /// registers.
     #[inline(always)]
     fn steps<M: Row>(
         &self,
@@ -511,32 +524,43 @@ impl Steps<'_> {
         predict: &M,
         correct: &impl Correct,
     ) -> Result<Belief<f64, 3>, String> {
-        let (k, m) = (self.k, self.m);
+        let (k, m) = (M::LEN, correct.dim());
         let first = range.start;
-        for i in range {
-            let u = &self.inputs[i * k..(i + 1) * k];
+        let inputs = self.inputs[first * k..range.end * k].chunks_exact(k);
+        // Without readings, an empty slice: every step only predicts.
+        let readings = self
+            .readings
+            .map_or(&[][..], |z| &z[first * m..range.end * m]);
+        let mut readings = readings.chunks_exact(m);
+        let targets = self.targets.map_or(&[][..], |t| &t[first..range.end]);
+        let mut targets = targets.iter();
+        let results = out
+            .poses
+            .chunks_exact_mut(3)
+            .zip(out.covs.chunks_exact_mut(9))
+            .zip(out.nis.iter_mut().zip(out.applied.iter_mut()));
+        for (j, (u, ((pose, cov), (nis, applied)))) in inputs.zip(results).enumerate() {
             belief = self
                 .ekf
                 .predict(&belief, predict, &M::input(u))
-                .map_err(|e| format!("step {i}: predict: {e}"))?;
-            let mut row = (f64::NAN, 0.0);
-            if let Some(zs) = self.readings {
-                let z = &zs[i * m..(i + 1) * m];
-                if !z.iter().all(|v| v.is_nan()) {
-                    let at = self.targets.map_or(0, |t| t[i]);
-                    let (b, v, a) = correct
-                        .correct(self.ekf, &belief, z, at)
-                        .map_err(|e| format!("step {i}: {e}"))?
-                        .map_err(|e| format!("step {i}: update: {e}"))?;
-                    belief = b;
-                    row = (v, if a { 1.0 } else { 0.0 });
-                }
+                .map_err(|e| format!("step {}: predict: {e}", first + j))?;
+            let z = readings.next();
+            let at = targets.next().copied().unwrap_or(0);
+            *nis = f64::NAN;
+            *applied = 0.0;
+            if let Some(z) = z
+                && !z.iter().all(|v| v.is_nan())
+            {
+                let (b, v, a) = correct
+                    .correct(self.ekf, &belief, z, at)
+                    .map_err(|e| format!("step {}: {e}", first + j))?
+                    .map_err(|e| format!("step {}: update: {e}", first + j))?;
+                belief = b;
+                *nis = v;
+                *applied = if a { 1.0 } else { 0.0 };
             }
-            let j = i - first;
-            out.poses[3 * j..3 * j + 3].copy_from_slice(belief.x.as_slice());
-            out.covs[9 * j..9 * j + 9].copy_from_slice(belief.p.as_slice());
-            out.nis[j] = row.0;
-            out.applied[j] = row.1;
+            pose.copy_from_slice(belief.x.as_slice());
+            cov.copy_from_slice(belief.p.as_slice());
         }
         Ok(belief)
     }
@@ -546,6 +570,10 @@ impl Steps<'_> {
 struct NoSensor;
 
 impl Correct for NoSensor {
+    fn dim(&self) -> usize {
+        1
+    }
+
     fn correct(
         &self,
         _ekf: &Ekf<f64>,

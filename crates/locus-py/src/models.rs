@@ -68,8 +68,9 @@ impl Motion {
     /// The input's numbers, named in errors.
     pub const fn input_len(&self) -> usize {
         match self {
-            Self::DiffDrive(_) => 2,
-            Self::Unicycle(_) | Self::SkidSteer(_) => 3,
+            Self::DiffDrive(_) => DiffDriveModel::<f64>::LEN,
+            Self::Unicycle(_) => UnicycleModel::<f64>::LEN,
+            Self::SkidSteer(_) => SkidSteerModel::<f64>::LEN,
         }
     }
 
@@ -115,11 +116,14 @@ impl Motion {
 /// A motion model whose input Python gives as a row of numbers (see
 /// [`Motion`]): the one place each model's row becomes its input.
 pub trait Row: MotionModel<f64, 3, 2> {
-    /// The input of the row `u`.
+    /// The row's length.
+    const LEN: usize;
+    /// The input of the row `u` (`LEN` numbers).
     fn input(u: &[f64]) -> Self::Input;
 }
 
 impl Row for DiffDriveModel<f64> {
+    const LEN: usize = 2;
     #[inline(always)]
     fn input(u: &[f64]) -> WheelTravel<f64> {
         WheelTravel { d1: u[0], d2: u[1] }
@@ -127,6 +131,7 @@ impl Row for DiffDriveModel<f64> {
 }
 
 impl Row for UnicycleModel<f64> {
+    const LEN: usize = 3;
     #[inline(always)]
     fn input(u: &[f64]) -> Velocities<f64> {
         Velocities {
@@ -138,6 +143,7 @@ impl Row for UnicycleModel<f64> {
 }
 
 impl Row for SkidSteerModel<f64> {
+    const LEN: usize = 3;
     #[inline(always)]
     fn input(u: &[f64]) -> TreadSpeeds<f64> {
         TreadSpeeds::new(u[0], u[1], u[2])
