@@ -84,6 +84,7 @@ class Filter:
 
 def replay_file(path: Union[str, PathLike], format: Optional[str] = ..., robot: int = ...,
                 topics: Optional[Union[str, PathLike]] = ..., truth: Optional[Union[str, PathLike]] = ...,
+                map: Optional[Union[str, PathLike]] = ...,
                 overrides: Optional[Dict[str, Any]] = ...) -> Dict[str, Any]: ...
 def replay_arrays(odometry: Array, sightings: Optional[Array] = ..., landmarks: Optional[Array] = ...,
                   truth: Optional[Array] = ..., start: Optional[Sequence[float]] = ..., name: str = ...,

@@ -119,6 +119,7 @@ def replay(
     robot: int = 1,
     topics: Union[str, os.PathLike, None] = None,
     truth_file: Union[str, os.PathLike, None] = None,
+    map_file: Union[str, os.PathLike, None] = None,
     name: str = "arrays",
     smooth: bool = False,
     **overrides: Any,
@@ -129,9 +130,14 @@ def replay(
 
     * a MRCLAM dataset directory (``robot=N``), a Locus CSV log (``.csv``,
       ``.csv.xz``), a libRSF log (``.txt``, its ground truth beside it or
-      ``truth_file=``) or a rosbag2 MCAP file (``.mcap``, with
-      ``topics=MAPPING.toml``); ``format=`` ("mrclam", "csv", "librsf",
-      "bag") overrides the guess from the path;
+      ``truth_file=``), a rosbag2 MCAP file (``.mcap``, with
+      ``topics=MAPPING.toml``; the map file the mapping names is loaded),
+      a CARMEN log (``.log``, ``.log.gz``: laser scans and odometry, the
+      corrected poses as truth; its map from ``map_file=``, a ROS
+      map_server YAML or walls) or paper 000's laser to a wall
+      (``format="laser-wall"``, laser_wall_1d's ``dataset1.txt``);
+      ``format=`` ("mrclam", "csv", "librsf", "bag", "carmen",
+      "laser-wall") overrides the guess from the path;
     * arrays: ``odometry`` (N, 3) ``t [s], v [m/s], omega [rad/s]``, and
       optionally ``sightings`` (M, 4) ``t [s], landmark id, range [m],
       bearing [rad]`` (NaN bearing: range only), ``landmarks`` (K, 3)
@@ -181,6 +187,7 @@ def replay(
             robot=robot,
             topics=None if topics is None else os.fspath(topics),
             truth=None if truth_file is None else os.fspath(truth_file),
+            map=None if map_file is None else os.fspath(map_file),
             overrides=overrides,
         )
     smoothed = None

@@ -30,3 +30,10 @@ def laser_wall() -> pathlib.Path:
     path = SHARED / "data" / "laser_wall_1d" / "dataset1.txt"
     assert path.is_file(), f"{path} is missing (the shared data beside the repository)"
     return path
+
+
+@pytest.fixture(scope="session")
+def intel_lab() -> pathlib.Path:
+    path = SHARED / "data" / "intel_lab"
+    assert path.is_dir(), f"{path} is missing (the shared data beside the repository)"
+    return path

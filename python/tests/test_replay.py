@@ -169,6 +169,44 @@ def test_a_bag_whose_mapping_names_a_map_replays_against_it(laser_wall, locus_bi
         locus.replay(bag, topics=mapping, **kw)
 
 
+def columns_equal(r, cli):
+    """A Python replay's arrays equal the CLI's log.csv to 1e-12."""
+    assert len(r.times) == len(cli["time_s"])
+    for got, col in ((r.times, "time_s"), (r.poses[:, 0], "x_m"), (r.poses[:, 1], "y_m"),
+                     (r.poses[:, 2], "theta_rad"), (r.covariances[:, 0, 0], "var_x_m2"),
+                     (r.covariances[:, 2, 2], "var_theta_rad2")):
+        np.testing.assert_allclose(got, cli[col], rtol=0, atol=1e-12, equal_nan=True)
+
+
+def test_a_laser_wall_log_replays_as_the_command_line(laser_wall, locus_bin, tmp_path):
+    flags = ["--no-estimate", "--q-v", "1e-4", "--q-omega", "1e-4", "--sigma-beam", "0.01"]
+    subprocess.run([locus_bin, "replay", "laser-wall", laser_wall, *flags, "--no-plots",
+                    "--out", tmp_path], check=True, capture_output=True)
+    r = locus.replay(laser_wall, format="laser-wall", estimate="nothing", q_v=1e-4, q_omega=1e-4,
+                     sigma_beam=0.01)
+    columns_equal(r, read_log_csv(tmp_path / "log.csv"))
+    assert r.metrics["counts"]["applied"] > 10000
+
+
+def test_a_carmen_log_replays_against_its_map_as_the_command_line(intel_lab, locus_bin, tmp_path):
+    log = intel_lab / "intel-corrected.log.gz"
+    subprocess.run([locus_bin, "map", "--carmen", log, "--out", tmp_path / "map"],
+                   check=True, capture_output=True)
+    grid = tmp_path / "map" / "map.yaml"
+    noise = dict(q_v=0.00902, q_omega=0.002, sigma_beam=0.04691, beam_bias_sigma=0.06473,
+                 beam_bias_tau=28.75, odometry_delay=0.1, estimate="nothing")
+    flags = [f"--{k.replace('_', '-')}={v}" for k, v in noise.items() if k != "estimate"]
+    subprocess.run([locus_bin, "replay", "carmen", log, "--map", grid, *flags, "--no-estimate",
+                    "--no-plots", "--out", tmp_path / "cli"], check=True, capture_output=True)
+    r = locus.replay(log, map_file=grid, **noise)
+    columns_equal(r, read_log_csv(tmp_path / "cli" / "log.csv"))
+    assert r.metrics["filter"]["position_rmse_m"] < 0.5
+    with pytest.raises(locus.LocusError, match="map=MAP"):
+        locus.replay(log, **noise)
+    with pytest.raises(locus.LocusError, match="nowhere.yaml"):
+        locus.replay(log, map_file=tmp_path / "nowhere.yaml", **noise)
+
+
 def test_smooth_gives_the_smoothed_track(mrclam6):
     r = locus.replay(mrclam6, robot=2, smooth=True)
     assert r.smoothed is not None

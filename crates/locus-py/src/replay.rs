@@ -25,24 +25,38 @@ enum Format {
     Csv,
     Librsf,
     Bag,
+    Carmen,
+    LaserWall,
 }
 
 impl Format {
     /// The format `name` names, or the one `path` looks like: a directory
-    /// is MRCLAM, `.mcap` a bag, `.txt` libRSF, anything else Locus CSV.
+    /// is MRCLAM, `.mcap` a bag, `.log` or `.log.gz` CARMEN, `.txt`
+    /// libRSF, anything else Locus CSV. A laser-wall log (`.txt` too) is
+    /// only named.
     fn of(name: Option<&str>, path: &Path) -> PyResult<Self> {
         Ok(match name {
             Some("mrclam") => Self::Mrclam,
             Some("csv") => Self::Csv,
             Some("librsf") => Self::Librsf,
             Some("bag") => Self::Bag,
+            Some("carmen") => Self::Carmen,
+            Some("laser-wall") => Self::LaserWall,
             Some(other) => {
                 return Err(value_error(
                     "format",
-                    format!("{other:?} is not one of \"mrclam\", \"csv\", \"librsf\", \"bag\""),
+                    format!(
+                        "{other:?} is not one of \"mrclam\", \"csv\", \"librsf\", \"bag\", \"carmen\", \"laser-wall\""
+                    ),
                 ));
             }
             None if path.is_dir() => Self::Mrclam,
+            None if path
+                .to_str()
+                .is_some_and(|p| p.ends_with(".log") || p.ends_with(".log.gz")) =>
+            {
+                Self::Carmen
+            }
             None => match path.extension().and_then(|e| e.to_str()) {
                 Some("mcap") => Self::Bag,
                 Some("txt") => Self::Librsf,
@@ -52,27 +66,46 @@ impl Format {
     }
 }
 
+/// Where a log's companions are: a bag's mapping, a libRSF log's truth, a
+/// CARMEN log's map.
+struct Companions {
+    topics: Option<PathBuf>,
+    truth: Option<PathBuf>,
+    map: Option<PathBuf>,
+}
+
 /// The log at `path` in `format`.
-fn read(
-    path: &Path,
-    format: Format,
-    robot: u32,
-    topics: Option<&Path>,
-    truth: Option<&Path>,
-) -> anyhow::Result<Log> {
+fn read(path: &Path, format: Format, robot: u32, with: &Companions) -> anyhow::Result<Log> {
+    let name = || {
+        path.file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+    };
     Ok(match format {
         Format::Mrclam => Log::mrclam(&Dataset::open(path)?, robot)?,
         Format::Csv => Log::locus_csv(path)?,
         Format::Librsf => {
-            let truth = truth
-                .map(Path::to_path_buf)
+            let truth = with
+                .truth
+                .clone()
                 .or_else(|| locus_logs::librsf::sibling_truth(path));
             Log::librsf(path, truth.as_deref())?
         }
         Format::Bag => Log::bag(
             path,
-            topics.context("topics=MAPPING.toml is needed to replay a bag")?,
+            with.topics
+                .as_deref()
+                .context("topics=MAPPING.toml is needed to replay a bag")?,
         )?,
+        Format::Carmen => {
+            let map = with
+                .map
+                .as_deref()
+                .context("map=MAP (a ROS YAML or walls) is needed to replay a CARMEN log")?;
+            let mut log = Log::from_locus(&name(), locus_logs::carmen::read(path)?.log)?;
+            log.load_map(map)?;
+            log
+        }
+        Format::LaserWall => Log::from_locus(&name(), locus_logs::aer1513::read(path)?.log)?,
     })
 }
 
@@ -356,7 +389,8 @@ fn replay_log(mut log: Log, options: &Options, stop: &Stop) -> anyhow::Result<Re
 
 /// Replays the log at `path` (see `locus.replay`).
 #[pyfunction]
-#[pyo3(signature = (path, format=None, robot=1, topics=None, truth=None, overrides=None))]
+#[pyo3(signature = (path, format=None, robot=1, topics=None, truth=None, map=None, overrides=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn replay_file<'py>(
     py: Python<'py>,
     path: PathBuf,
@@ -364,12 +398,14 @@ pub fn replay_file<'py>(
     robot: u32,
     topics: Option<PathBuf>,
     truth: Option<PathBuf>,
+    map: Option<PathBuf>,
     overrides: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let format = Format::of(format, &path)?;
     let options = options(overrides)?;
+    let with = Companions { topics, truth, map };
     let out = interrupt::run(py, move |stop| {
-        let log = read(&path, format, robot, topics.as_deref(), truth.as_deref())?;
+        let log = read(&path, format, robot, &with)?;
         replay_log(log, &options, stop)
     })?
     .map_err(|e| locus_error(&e))?;

@@ -479,7 +479,7 @@ impl Log {
     pub fn locus_csv(path: &Path) -> Result<Self, Error> {
         let (log, lines, file) = locus_csv::read_with_lines(path)?;
         let map_file = log.map.as_ref().map(|m| m.resolve(&file));
-        Self::with_map_file(&file_name(path), log, lines, map_file)
+        Self::from_locus_with_map(&file_name(path), log, lines, map_file)
     }
 
     /// Reads a ROS 2 bag (MCAP) by the mapping in the TOML file
@@ -494,12 +494,29 @@ impl Log {
         let log = locus_bag::read_log(bag, mapping_file)?;
         // `read_log` resolved the map path against the mapping file.
         let map_file = log.map.as_ref().map(|m| m.as_str().into());
-        Self::with_map_file(&file_name(bag), log, Lines::default(), map_file)
+        Self::from_locus_with_map(&file_name(bag), log, Lines::default(), map_file)
+    }
+
+    /// Loads the map file at `path` (a ROS map_server YAML, or walls as
+    /// text or TOML: `locus_map::Map::load`) as the log's map, the one its
+    /// beams are corrected against (`locus replay carmen --map`).
+    ///
+    /// # Errors
+    /// [`Error::Map`]: the map reader's error, which names the file (and
+    /// the line and field of a malformed one).
+    pub fn load_map(&mut self, path: &Path) -> Result<(), Error> {
+        let map = Map::load(path).map_err(|e| Error::Map {
+            file: self.name.clone(),
+            line: None,
+            reason: e.to_string(),
+        })?;
+        self.map = Some(SharedMap(Arc::new(map)));
+        Ok(())
     }
 
     /// [`Log::from_locus_lines`] with the map loaded from `map_file` (the
     /// log's `map` record resolved), which a log with walls must not have.
-    fn with_map_file(
+    fn from_locus_with_map(
         name: &str,
         log: LocusLog,
         lines: Lines,

@@ -9,7 +9,6 @@ use anyhow::Context as _;
 use clap::{Args as ClapArgs, Subcommand};
 use locus_logs::mrclam::Dataset;
 use locus_models::plausible::Limits;
-use locus_replay::log::SharedMap;
 use locus_replay::policy::Estimation;
 use locus_replay::{Config, GaussMarkov, Log, Options};
 
@@ -238,18 +237,11 @@ impl Source {
                     *reference = Some(Reference::carmen(&read, path, *relations_offset)?);
                 }
                 let mut log = Log::from_locus(&name(file), read.log)?;
-                log.map = Some(load_map(map)?);
+                log.load_map(map)?;
                 (log, export.as_ref(), common)
             }
         })
     }
-}
-
-/// The map file at `path` (ROS map_server YAML, or walls as text or TOML).
-fn load_map(path: &std::path::Path) -> anyhow::Result<SharedMap> {
-    let loaded = locus_replay::log::Map::load(path)
-        .with_context(|| format!("reading the map {}", path.display()))?;
-    Ok(SharedMap::from(loaded))
 }
 
 /// The replay's options, the same for every source.
