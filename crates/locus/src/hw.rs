@@ -82,6 +82,12 @@ pub struct Args {
     /// Do not simulate the Verilog core (needs Icarus Verilog, `iverilog`).
     #[arg(long)]
     pub no_sim: bool,
+    /// The output directory of a place-and-route run of the core
+    /// (`bash scripts/hw_pnr.sh DIR`, default DIR target/hw-pnr): its
+    /// Fmax, LUT4, flip-flops and multipliers beside the papers' core.
+    /// Without it the row reads "n/a".
+    #[arg(long, value_name = "DIR")]
+    pub pnr: Option<std::path::PathBuf>,
 }
 
 /// Paper 000's laser-to-wall model (n = 3, m = 2) in f32.
@@ -288,5 +294,10 @@ pub fn run(args: &Args) -> Result<()> {
     if !args.no_sim {
         crate::hw_rtl::print_simulated(&inputs, args.clock_mhz)?;
     }
-    Ok(())
+    let built = HwConfig {
+        latencies: locus_hw::hdl::built_latencies()?,
+        ..HwConfig::default()
+    };
+    let cycles = hw::run(&built, Schedule::Inverse2x2, &inputs)?.cycles;
+    crate::hw_pnr::print(args.pnr.as_deref(), cycles)
 }

@@ -12,6 +12,7 @@ mod foxglove;
 mod guide;
 mod host;
 mod hw;
+mod hw_pnr;
 mod hw_rtl;
 mod link_scenario;
 mod map;

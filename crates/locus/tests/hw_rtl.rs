@@ -81,3 +81,61 @@ fn locus_hw_prints_the_simulated_cycles_beside_the_model_and_the_paper() {
     assert!(row("model, same latencies").contains(&c));
     assert!(row("paper 003").contains("2.08"));
 }
+
+#[test]
+fn locus_hw_prints_the_placed_and_routed_row_or_why_not() {
+    let row = |out: &str, label: &str| {
+        out.lines()
+            .find(|l| l.contains(label))
+            .unwrap_or_else(|| panic!("no row {label}: {out}"))
+            .to_owned()
+    };
+    let c = model_cycles().to_string();
+    // No flow run given: n/a, and how to get one.
+    let out = locus(&["hw", "--no-sim"]);
+    let none = row(&out, "│ this core ");
+    assert!(
+        none.contains(&c) && none.contains("n/a: not given: run `bash scripts/hw_pnr.sh`"),
+        "{none}"
+    );
+    assert!(row(&out, "papers 000/003 (EP4CE115").contains("22089 LEs"));
+    // A flow run's report (nextpnr 0.11's shape): its Fmax and cells, and
+    // the time at the model's cycles.
+    let dir = std::env::temp_dir().join(format!("locus-hw-pnr-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let d = dir.to_str().unwrap();
+    let out = locus(&["hw", "--no-sim", "--pnr", d]);
+    assert!(
+        row(&out, "│ this core ").contains("report.json is missing"),
+        "{out}"
+    );
+    std::fs::write(
+        dir.join("report.json"),
+        r#"{"fmax": {"$glbnet$clk": {"achieved": 50.0, "constraint": 50}},
+           "utilization": {"TRELLIS_COMB": {"used": 20000, "available": 83640},
+           "TRELLIS_FF": {"used": 21000, "available": 83640},
+           "MULT18X18D": {"used": 40, "available": 156}}}"#,
+    )
+    .unwrap();
+    let out = locus(&["hw", "--no-sim", "--pnr", d]);
+    let placed = row(&out, "this core (nextpnr-ecp5)");
+    let us = format!("{:.2}", model_cycles() as f64 / 50.0);
+    for want in [
+        c.as_str(),
+        "50.00",
+        us.as_str(),
+        "20000",
+        "21000",
+        "40 MULT18X18D",
+    ] {
+        assert!(placed.contains(want), "{want}: {placed}");
+    }
+    std::fs::write(dir.join("report.json"), "{").unwrap();
+    let err = Command::new(env!("CARGO_BIN_EXE_locus"))
+        .args(["hw", "--no-sim", "--pnr", d])
+        .output()
+        .unwrap();
+    assert!(!err.status.success());
+    assert!(String::from_utf8_lossy(&err.stderr).contains("not a nextpnr report"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
