@@ -11,11 +11,16 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 SHARED = pathlib.Path(os.environ.get("LOCUS_SHARED", ROOT.parent / "shared"))
 
 
+def shared_data(*parts: str) -> pathlib.Path:
+    """A file or directory of ../shared/data, which must be there."""
+    path = SHARED.joinpath("data", *parts)
+    assert path.exists(), f"{path} is missing (the shared data beside the repository)"
+    return path
+
+
 @pytest.fixture(scope="session")
 def mrclam6() -> pathlib.Path:
-    path = SHARED / "data" / "mrclam" / "MRCLAM_Dataset6"
-    assert path.is_dir(), f"{path} is missing (the shared data beside the repository)"
-    return path
+    return shared_data("mrclam", "MRCLAM_Dataset6")
 
 
 @pytest.fixture(scope="session")
@@ -27,13 +32,9 @@ def locus_bin() -> pathlib.Path:
 
 @pytest.fixture(scope="session")
 def laser_wall() -> pathlib.Path:
-    path = SHARED / "data" / "laser_wall_1d" / "dataset1.txt"
-    assert path.is_file(), f"{path} is missing (the shared data beside the repository)"
-    return path
+    return shared_data("laser_wall_1d", "dataset1.txt")
 
 
 @pytest.fixture(scope="session")
 def intel_lab() -> pathlib.Path:
-    path = SHARED / "data" / "intel_lab"
-    assert path.is_dir(), f"{path} is missing (the shared data beside the repository)"
-    return path
+    return shared_data("intel_lab")
