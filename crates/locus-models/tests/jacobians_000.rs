@@ -11,11 +11,13 @@
 //! * `LaserRange` (H): the range is differentiable where the nearest hit is
 //!   strictly inside its segment, in front of the sensor, within range, the
 //!   beam not parallel to the wall, and the nearest segment cannot switch. The
-//!   finite differences move the pose by up to 1e-5 (m, rad), so the tested
-//!   domain keeps a margin: `|n.u| >= 0.1` (beam at least ~5.7 deg from
-//!   grazing), range in [1 mm, max_range - 1 mm], hit at least 1 mm from both
-//!   ends of its segment, no end of another segment within 1 mm of the beam
-//!   in front of the hit, and no other segment crossing the beam within 1 mm
+//!   finite differences move each pose coordinate by 1e-5 * max(1, |x_j|)
+//!   (m, rad), so the tested domain keeps a margin: `|n.u| >= 0.1` (beam at
+//!   least ~5.7 deg from grazing), range in [1 mm, max_range - 1 mm], hit
+//!   at least 1 mm plus the stencil's reach along the wall (up to a few mm
+//!   at long range and grazing incidence, see `stencil_reach`) from both
+//!   ends of its segment, no end of another segment within that distance of
+//!   the beam in front of the hit, and no other segment crossing the beam within 1 mm
 //!   of the sensor or of the hit. The random scenes reach a little beyond
 //!   that domain; points outside it are skipped and counted, and at least
 //!   80 % (and at least 1000) must be checked.
@@ -92,6 +94,18 @@ fn beam_line_crossing(p_s: &Vector2<f64>, u: &Vector2<f64>, seg: &Segment<f64>) 
     (t * len >= -MARGIN && t * len <= len + MARGIN).then_some(g)
 }
 
+/// How far the hit point can slide along its wall within the checker's
+/// stencil (m): the sensor moves by up to `h_x + h_y` plus its lever arm
+/// times `h_theta`, the beam turns by `h_theta` and so sweeps `range *
+/// h_theta` across the wall, and a wall met at incidence `|n.u|` stretches
+/// both by `1/|n.u|`. At 8 m, a heading near pi and `|n.u|` = 0.1 this is
+/// about 2.5 mm, more than `MARGIN`.
+fn stencil_reach(model: &LaserRange<'_, f64>, x: &Vector3<f64>, range: f64, n_dot_u: f64) -> f64 {
+    let h = |v: f64| DEFAULT_STEP * v.abs().max(1.0);
+    let lever = model.mount.x_si.hypot(model.mount.y_si);
+    (h(x[0]) + h(x[1]) + (lever + range) * h(x[2])) / n_dot_u.abs()
+}
+
 /// Whether `x` lies in the tested domain of `model` (see the module doc).
 fn in_domain(model: &LaserRange<'_, f64>, x: &Vector3<f64>) -> bool {
     let Some(r) = model.cast(x) else {
@@ -104,9 +118,10 @@ fn in_domain(model: &LaserRange<'_, f64>, x: &Vector3<f64>) -> bool {
     {
         return false;
     }
+    let end_margin = MARGIN + stencil_reach(model, x, hit.range, hit.n_dot_u);
     let own = &model.map[r.segment];
-    if (hit.point - Vector2::from(own.a)).norm() < MARGIN
-        || (hit.point - Vector2::from(own.b)).norm() < MARGIN
+    if (hit.point - Vector2::from(own.a)).norm() < end_margin
+        || (hit.point - Vector2::from(own.b)).norm() < end_margin
     {
         return false;
     }
@@ -121,7 +136,7 @@ fn in_domain(model: &LaserRange<'_, f64>, x: &Vector3<f64>) -> bool {
         for e in [seg.a, seg.b] {
             let w = Vector2::from(e) - p_s;
             let along = w.dot(&u);
-            if along > -MARGIN && along < hit.range + MARGIN && cross(&u, &w).abs() < MARGIN {
+            if along > -MARGIN && along < hit.range + MARGIN && cross(&u, &w).abs() < end_margin {
                 return false;
             }
         }
