@@ -6,6 +6,7 @@ pub mod beam_sensor;
 pub mod carmen;
 pub mod decimal;
 pub mod error;
+pub mod ir_pair;
 pub mod librsf;
 pub mod lines;
 pub mod locus_csv;
@@ -29,6 +30,7 @@ pub const MAX_LINE: usize = 1 << 20;
 
 pub use beam_sensor::BeamSensor;
 pub use error::{Error, FieldProblem, RecordProblem, Result};
+pub use ir_pair::IrPairRecord;
 pub use lines::Lines;
 pub use noise::NoiseRecords;
 pub use scans::{Scan, Scans};

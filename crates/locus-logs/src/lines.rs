@@ -27,4 +27,6 @@ pub struct Lines {
     pub beam_sensors: Vec<usize>,
     /// Each scan's (version 4).
     pub scans: Vec<usize>,
+    /// Each IR pair's (version 5).
+    pub ir_pairs: Vec<usize>,
 }

@@ -37,7 +37,16 @@ pub fn associate_ir_wall<T: Scalar>(
     let dir = Vector2::new(s, -c);
     let hit = ray_cast(&origin, &dir, map, &BeamLimits::with_max_range(gate_range))?;
     let seg = &map[hit.segment];
-    let (dx, dy) = (seg.b[0] - seg.a[0], seg.b[1] - seg.a[1]);
+    axis_wall(seg.a, seg.b, &dir)
+}
+
+/// The wall of the segment from `a` to `b` (m) as an IR pair sensing along
+/// `dir` sees it: the [`AxisWall`] of its line, or `None` if the segment is
+/// not axis-aligned (its direction within `1e-9`, relative, of an axis).
+/// [`associate_ir_wall`] and a log's replay (which casts in its own map)
+/// classify the wall they hit through it.
+pub fn axis_wall<T: Scalar>(a: [T; 2], b: [T; 2], dir: &Vector2<T>) -> Option<AxisWall<T>> {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let tol = cast::<T>(1e-9) * (dx.abs() + dy.abs());
     let axis = if dx.abs() <= tol {
         WallAxis::X // vertical segment: the line x = const
@@ -47,8 +56,8 @@ pub fn associate_ir_wall<T: Scalar>(
         return None;
     };
     let (coordinate, toward) = match axis {
-        WallAxis::X => (seg.a[0], dir[0]),
-        WallAxis::Y => (seg.a[1], dir[1]),
+        WallAxis::X => (a[0], dir[0]),
+        WallAxis::Y => (a[1], dir[1]),
     };
     let side = if toward > T::zero() {
         Side::Positive

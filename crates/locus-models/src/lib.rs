@@ -12,6 +12,7 @@ pub mod ir_correction;
 pub mod ir_wall;
 pub mod laser_wall;
 pub mod observer;
+pub mod on_pose;
 pub mod planar_beam;
 pub mod plausible;
 pub mod range_bearing;
@@ -21,7 +22,7 @@ pub mod square001;
 pub mod tricycle;
 pub mod unicycle;
 
-pub use association::associate_ir_wall;
+pub use association::{associate_ir_wall, axis_wall};
 pub use camera::{CameraMark, CameraMarks, CameraMarks4, EulerRotation, Intrinsics, RandomWalk6};
 pub use diff_drive::{DiffDrive, WheelTravel};
 pub use ir_correction::{CorrectionDetail, IrCorrection};

@@ -156,7 +156,8 @@ pub(crate) fn apply(
 }
 
 /// Corrects `track` with scan `index` of the log, one chosen beam after
-/// the other (papers 000/003: each beam one scalar update): the beam cast
+/// the other (papers 000/003: each beam one scalar update), or as paper
+/// 001's IR pair if the log declares its sensor one (`ir_pair.rs`): the beam cast
 /// in the log's map from the current estimate gives the surface it should
 /// see, [`PlanarBeam`] the range to it and its Jacobian. A beam with no
 /// return, no surface in range (or one met grazing), or a reading far
@@ -184,6 +185,10 @@ fn scan_correct(
         recovery: None,
         ..*rules
     };
+    if let Some(pair) = crate::ir_pair::pair_of(log, index) {
+        entry.nll = crate::ir_pair::correct(cfg, log, &rules, track, &mut entry.scan, index, pair)?;
+        return Ok(());
+    }
     let robust = cfg.robust_dof.and_then(|dof| StudentT::new(dof).ok());
     let count = scan.ranges.len();
     let out = &mut entry.scan;

@@ -82,6 +82,7 @@ mod filter;
 pub mod fleet;
 pub mod initial;
 mod instants;
+mod ir_pair;
 mod linearised_at;
 pub mod log;
 pub mod noise;

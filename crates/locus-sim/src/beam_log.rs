@@ -44,17 +44,19 @@
 //!   format has one range noise for all beams; none is written otherwise),
 //!   paper 000's laser noise while moving.
 //!
-//! What the log cannot say, and a replay of it therefore does otherwise:
-//! paper 001's filter corrects with the IR *pair*, one 2-D measurement of
-//! the wall's distance and angle (eq. 3-5, noise `V R V^T` at the readings),
-//! only when both sensors read; the replay corrects with each beam as one
-//! scalar update linearised at its estimate (docs/replay.md, "A simulated
-//! run as a log", has the measured difference).
+//! * `ir_pair` (version 5): s1 and s2 read as paper 001's pair, with the
+//!   loop's association range, so that a replay corrects with the pair's
+//!   2-D measurement of the wall's distance and angle (eq. 3-5, noise `V R
+//!   V^T` at the readings) when both sensors read, as the loop does. The IR
+//!   readings are 32-bit floats in the loop itself ([`SharpIr`]), so the
+//!   log holds exactly what it corrected with. A replay with the loop's
+//!   noise gives its estimates (docs/replay.md, "A simulated run as a
+//!   log", has the measured difference).
 
 use locus_logs::locus_csv::LocusLog;
 use locus_logs::mrclam::{Groundtruth, Odometry, TruthPose};
 use locus_logs::scans::{MISSING, NO_RETURN};
-use locus_logs::{BeamSensor, SensorMount, Wall};
+use locus_logs::{BeamSensor, IrPairRecord, SensorMount, Wall};
 use locus_models::laser_wall::{LaserMount, Segment};
 use locus_models::unicycle::{Unicycle, Velocities};
 use locus_models::{DiffDrive, WheelTravel};
@@ -220,6 +222,11 @@ impl SquareLog {
         let log = &mut builder.log;
         log.walls = World::square_arena().walls.iter().map(wall).collect();
         log.beam_sensors = sensors.to_vec();
+        log.ir_pairs = vec![IrPairRecord {
+            front: 0,
+            rear: 1,
+            association_range: cfg.association_range,
+        }];
         log.noise.q_v = Some(cfg.q11 / cfg.dt);
         log.noise.q_omega = Some(cfg.q22 / cfg.dt);
         log.noise.sigma_beam = (cfg.r11 == cfg.r22).then(|| cfg.r11.sqrt());

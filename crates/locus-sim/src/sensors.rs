@@ -229,7 +229,8 @@ impl Encoder {
 /// reading is not quantised to integers. Gaussian noise of standard deviation
 /// `sigma` (m) is added to the distance; a reading exists only when the
 /// noisy distance is in the useful range `[min_range, max_range]`
-/// (\[assumed\] 0.04-0.30 m).
+/// (\[assumed\] 0.04-0.30 m). The distance is reported as a 32-bit float,
+/// as the robot link and the log format carry it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SharpIr {
     /// Scale `a` (m per curve unit, > 0).
@@ -331,7 +332,12 @@ impl SharpIr {
     /// number) or [`IrReading::Below`].
     pub fn classify(&self, noisy: f64) -> IrReading {
         if noisy >= self.min_range && noisy <= self.max_range {
-            IrReading::Distance(self.distance_from_raw(self.raw_from_distance(noisy)))
+            // Reported as a 32-bit float, as the robot link (docs/protocol.md)
+            // and the log format carry it, so that a run written as a log
+            // replays with the very readings the loop corrected with.
+            let distance = self.distance_from_raw(self.raw_from_distance(noisy));
+            #[allow(clippy::cast_possible_truncation)]
+            IrReading::Distance(f64::from(distance as f32))
         } else if noisy < self.min_range {
             IrReading::Below
         } else {

@@ -115,9 +115,14 @@ fn ir_curve_round_trips() {
     let mut r = rng(5);
     assert!(s.read(0.31, &mut r).is_none());
     assert!(s.read(0.03, &mut r).is_none());
-    assert!((s.read(0.2, &mut r).unwrap() - 0.2).abs() < 1e-12);
+    // The distance is reported as the nearest 32-bit float.
+    assert_eq!(s.read(0.2, &mut r).unwrap(), f64::from(0.2f32));
     assert!(SharpIr::assumed(-1.0).is_err());
 }
+
+/// How far a reading of at most 0.3 m reported as a 32-bit float is from
+/// the distance (m): half a unit in the last place, at most.
+const F32_READING: f64 = 0.5 * 0.3 * f32::EPSILON as f64;
 
 fn wall_x(w: f64) -> Vec<Segment<f64>> {
     vec![Segment::new([w, -1.0], [w, 1.0])]
@@ -131,7 +136,7 @@ fn ir_pair_reads_distance_to_wall() {
     // Heading +y: the right side faces +x.
     let pose = [0.85, 0.0, core::f64::consts::FRAC_PI_2];
     let (d1, d2) = pair.read(&walls, pose, &mut r).unwrap().unwrap();
-    assert!((d1 - 0.15).abs() < 1e-12 && (d2 - 0.15).abs() < 1e-12);
+    assert_eq!((d1, d2), (f64::from(0.15f32), f64::from(0.15f32)));
     // Beyond 0.30 m: no observation.
     assert!(
         pair.read(&walls, [0.65, 0.0, pose[2]], &mut r)
@@ -153,8 +158,10 @@ fn ir_pair_reads_distance_to_wall() {
         .unwrap();
     assert!(d1 > d2);
     let (ang, dist) = pair.pair.angle_and_distance(d1, d2);
-    assert!((ang - turn).abs() < 1e-12);
-    assert!((dist - 0.15).abs() < 1e-12);
+    // To the readings' 32-bit rounding: each reading within F32_READING,
+    // so the angle within 2 F32_READING / L.
+    assert!((ang - turn).abs() <= 2.0 * F32_READING / 0.1, "{ang}");
+    assert!((dist - 0.15).abs() <= 2.0 * F32_READING, "{dist}");
 }
 
 #[test]
@@ -177,8 +184,8 @@ fn ir_pair_offsets() {
         .unwrap()
         .unwrap();
     let (ang, dist) = pair.pair.angle_and_distance(d1, d2);
-    assert!((ang - turn).abs() < 1e-12);
-    assert!((dist - 0.2).abs() < 1e-12, "{dist}");
+    assert!((ang - turn).abs() <= 2.0 * F32_READING / 0.1, "{ang}");
+    assert!((dist - 0.2).abs() <= 2.0 * F32_READING, "{dist}");
 }
 
 #[test]

@@ -123,7 +123,7 @@ fn the_uwb_log_replays_position_only_and_every_range_is_accounted_for() {
     // The export is a v4 log of range lines and truth without heading,
     // and replays to the same figures.
     let csv = fs::read_to_string(&export).unwrap();
-    assert!(csv.starts_with("# Locus log v4"), "{csv}");
+    assert!(csv.starts_with("# Locus log v5"), "{csv}");
     assert_eq!(
         csv.lines().filter(|l| l.starts_with("range,")).count(),
         ranges

@@ -1,5 +1,6 @@
 //! The version-4 records of walls and beams: `wall`, `beam_sensor` and the
-//! ranges of a `scan`, each checked with its field named.
+//! ranges of a `scan`, and version 5's `ir_pair`, each checked with its
+//! field named.
 
 use super::*;
 
@@ -144,4 +145,62 @@ pub(super) fn scan_ranges(
         return Err(f.field_error("range", count(found)));
     }
     Ok(())
+}
+
+/// The fields of an `ir_pair` line after its kind: two one-beam sensors
+/// declared above it, neither in another pair, that can form paper 001's
+/// pair ([`IrPairRecord::sensor_problem`], [`IrPairRecord::pair_problem`]),
+/// and the association range.
+pub(super) fn ir_pair(
+    f: &mut Fields<'_>,
+    sensors: &[BeamSensor],
+    pairs: &[IrPairRecord],
+    pair_lines: &[usize],
+) -> Result<IrPairRecord> {
+    let out_of_range = |f: &Fields<'_>, field, id: u32, expected| {
+        f.field_error(
+            field,
+            FieldProblem::OutOfRange {
+                value: id.to_string(),
+                expected,
+            },
+        )
+    };
+    let sensor = |f: &mut Fields<'_>, field: &'static str| -> Result<BeamSensor> {
+        let id = f.u32(field)?;
+        if let Some(i) = pairs.iter().position(|p| p.front == id || p.rear == id) {
+            return Err(f.record_error(RecordProblem::Duplicate {
+                what: "IR pair sensor id",
+                value: id,
+                first_line: pair_lines[i],
+            }));
+        }
+        let Some(s) = sensors.iter().find(|b| b.id == id) else {
+            return Err(out_of_range(
+                f,
+                field,
+                id,
+                "the id of a beam_sensor line above this one",
+            ));
+        };
+        match IrPairRecord::sensor_problem(s) {
+            Some(problem) => Err(out_of_range(f, field, id, problem.expected())),
+            None => Ok(*s),
+        }
+    };
+    let front = sensor(f, "front")?;
+    let rear = sensor(f, "rear")?;
+    if let Some(problem) = IrPairRecord::pair_problem(&front, &rear) {
+        return Err(out_of_range(f, "rear", rear.id, problem.expected()));
+    }
+    let association_range = f.bounded(
+        "association_range",
+        |v| v > 0.0 && v <= MAX_RANGE_LIMIT,
+        "> 0 and <= 1e5 m",
+    )?;
+    Ok(IrPairRecord {
+        front: front.id,
+        rear: rear.id,
+        association_range,
+    })
 }

@@ -17,6 +17,7 @@
 //! | `map` | path | relative to the log's directory (version 4) |
 //! | `beam_sensor` | id, x, y, yaw, min_range, max_range, angle_0, angle_step, count | -, m, m, rad, m, m, rad, rad, - (version 4) |
 //! | `scan` | t, id, r_1 ... r_count | s, -, m or `max` or `-` (version 4) |
+//! | `ir_pair` | front, rear, association_range | -, -, m (version 5: two IR sensors read as paper 001's pair) |
 //!
 //! Lines starting with `#` and blank lines are skipped. Odometry and truth
 //! times must not decrease; truth lines all give a heading or none;
@@ -27,14 +28,17 @@
 //! `sensor` line (at the robot's centre, along its heading, if there is
 //! none). Version 4: walls and at most one `map` line; beam sensor ids are
 //! unique, a `scan` names a beam sensor declared above it and gives one
-//! range per beam; scan times do not decrease. Errors name the file, line,
-//! column and field.
+//! range per beam; scan times do not decrease. Version 5: an `ir_pair`
+//! names two one-beam sensors declared above it that form paper 001's pair
+//! ([`IrPairRecord::check`]), each sensor in one pair at most. Errors name
+//! the file, line, column and field.
 
 use std::path::{Path, PathBuf};
 
 use crate::beam_sensor::{BeamSensor, MAX_BEAMS, MAX_MOUNT_OFFSET, MAX_RANGE_LIMIT};
 use crate::decimal::push_f64;
 use crate::error::{FieldProblem, RecordProblem, Result, excerpt};
+use crate::ir_pair::IrPairRecord;
 use crate::lines::Lines;
 use crate::mrclam::{Groundtruth, Odometry, TruthPose};
 use crate::noise::NoiseRecords;
@@ -48,7 +52,7 @@ mod beams;
 mod tests;
 mod write;
 
-use beams::{beam_sensor, scan_ranges, wall};
+use beams::{beam_sensor, ir_pair, scan_ranges, wall};
 pub use write::write;
 
 /// Largest coordinate of a wall a reader accepts, m (100 km, as the
@@ -115,6 +119,9 @@ pub struct LocusLog {
     /// Scans (`scan` lines), in file order, times not decreasing
     /// (version 4).
     pub scans: Scans,
+    /// Beam sensors read as paper 001's IR pair (`ir_pair` lines), in file
+    /// order (version 5).
+    pub ir_pairs: Vec<IrPairRecord>,
 }
 
 impl LocusLog {
@@ -127,7 +134,7 @@ impl LocusLog {
 
 /// The kinds a line may start with.
 const KINDS: &str = "one of sensor, noise, landmark, start, odometry, measurement, range, \
-                     truth, wall, map, beam_sensor, scan";
+                     truth, wall, map, beam_sensor, scan, ir_pair";
 
 /// The names a `noise` line may give.
 const NOISE_NAMES: &str = "one of q_v, q_omega, sigma_range, sigma_bearing, sigma_beam";
@@ -359,6 +366,12 @@ pub fn parse_with_lines(text: &str, path: &Path) -> Result<(LocusLog, Lines)> {
                 scan_ranges(&mut f, sensor, &mut log.scans)?;
                 log.scans.close(time, id);
                 lines.scans.push(line);
+            }
+            "ir_pair" => {
+                let p = ir_pair(&mut f, &log.beam_sensors, &log.ir_pairs, &lines.ir_pairs)?;
+                f.end(4)?;
+                log.ir_pairs.push(p);
+                lines.ir_pairs.push(line);
             }
             other => {
                 return Err(f.field_error(

@@ -45,7 +45,7 @@ fn parses_sensor_and_noise_and_round_trips() {
         }
     );
     let written = write(&log);
-    assert!(written.starts_with("# Locus log v4"), "{written}");
+    assert!(written.starts_with("# Locus log v5"), "{written}");
     assert!(
         written.contains("\nsensor,0.1,-0.02,1.5707963267948966\n"),
         "{written}"
@@ -497,5 +497,96 @@ fn a_missing_file_is_named() {
     assert_eq!(
         e.to_string(),
         "/nonexistent/robot.csv: not found (nor /nonexistent/robot.csv.xz)"
+    );
+}
+
+/// Paper 001's two IR sensors, s1 ahead of s2, both looking right, and a
+/// lidar.
+const SENSORS_V5: &str = "beam_sensor,0,0.05,0,-1.5707963267948966,0.04,0.3,0,0,1\n\
+                          beam_sensor,1,-0.05,0,-1.5707963267948966,0.04,0.3,0,0,1\n\
+                          beam_sensor,2,0,0,0,0.1,8,-1,0.5,5\n\
+                          beam_sensor,3,-0.05,0,1.5707963267948966,0.04,0.3,0,0,1\n\
+                          beam_sensor,4,-0.05,0.02,-1.5707963267948966,0.04,0.3,0,0,1\n";
+
+#[test]
+fn an_ir_pair_reads_and_round_trips() {
+    let text = format!("{SENSORS_V5}ir_pair,0,1,0.4\nscan,0.1,0,0.12\nscan,0.1,1,max\n");
+    let (log, lines) = parse_with_lines(&text, p()).unwrap();
+    assert_eq!(
+        log.ir_pairs,
+        [IrPairRecord {
+            front: 0,
+            rear: 1,
+            association_range: 0.4
+        }]
+    );
+    assert_eq!(lines.ir_pairs, [6]);
+    let written = write(&log);
+    assert!(written.starts_with("# Locus log v5"), "{written}");
+    assert!(written.contains("\nir_pair,0,1,0.4\n"), "{written}");
+    assert_eq!(parse(&written, p()).unwrap(), log);
+}
+
+#[test]
+fn malformed_ir_pair_lines_name_the_line_and_field() {
+    let with = |line: &str| message(&format!("{SENSORS_V5}{line}"));
+    for (line, field, column, why) in [
+        (
+            "ir_pair,9,1,0.4",
+            "front",
+            2,
+            "9 is out of range: the id of a beam_sensor line above this one",
+        ),
+        (
+            "ir_pair,2,1,0.4",
+            "front",
+            2,
+            "2 is out of range: a one-beam sensor (count 1)",
+        ),
+        (
+            "ir_pair,0,3,0.4",
+            "rear",
+            3,
+            "3 is out of range: a sensor looking to the robot's right (yaw -pi/2, angle_0 0), \
+             as paper 001's pair",
+        ),
+        (
+            "ir_pair,0,0,0.4",
+            "rear",
+            3,
+            "0 is out of range: a sensor other than the front one",
+        ),
+        (
+            "ir_pair,1,0,0.4",
+            "rear",
+            3,
+            "0 is out of range: a sensor behind the front one (smaller x)",
+        ),
+        (
+            "ir_pair,0,4,0.4",
+            "rear",
+            3,
+            "4 is out of range: a sensor at the front one's lateral offset y",
+        ),
+        (
+            "ir_pair,0,1,0",
+            "association_range",
+            4,
+            "0 is out of range: > 0 and <= 1e5 m",
+        ),
+    ] {
+        assert_eq!(
+            with(&format!("{line}\n")),
+            format!("log.csv:6: field \"{field}\" (column {column}): {why}"),
+            "{line}"
+        );
+    }
+    assert_eq!(
+        with("ir_pair,0,1,0.4\nir_pair,1,4,0.4\n"),
+        "log.csv:7: IR pair sensor id 1 already appeared on line 6"
+    );
+    assert_eq!(
+        with("ir_pair,0,1,0.4,5\n"),
+        "log.csv:6: 5 fields, the format has 4"
     );
 }

@@ -1,4 +1,4 @@
-//! The Locus CSV writer (version 4).
+//! The Locus CSV writer (version 5).
 
 use super::*;
 
@@ -16,7 +16,7 @@ pub fn write(log: &LocusLog) -> String {
     let lines = 1 + log.landmarks.len() + log.truth.poses().len() + log.odometry.len();
     let mut s = String::with_capacity(64 * (lines + log.measurements.len()));
     s.reserve(12 * log.scans.ranges_len() + 48 * log.scans.len());
-    s.push_str("# Locus log v4 (docs/log-format.md); SI units\n");
+    s.push_str("# Locus log v5 (docs/log-format.md); SI units\n");
     if let Some(m) = log.sensor {
         record(&mut s, "sensor", &[m.x, m.y, m.yaw]);
     }
@@ -54,6 +54,10 @@ pub fn write(log: &LocusLog) -> String {
             push_f64(&mut s, v);
         }
         let _ = writeln!(s, ",{}", b.count);
+    }
+    for p in &log.ir_pairs {
+        let _ = write!(s, "ir_pair,{},{}", p.front, p.rear);
+        record(&mut s, "", &[p.association_range]);
     }
     if let Some(p) = log.start {
         record(&mut s, "start", &[p.time, p.x, p.y, p.theta]);

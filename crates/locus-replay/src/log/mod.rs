@@ -12,7 +12,9 @@ use alloc::sync::Arc;
 pub use locus_logs::MapPath;
 use locus_logs::locus_csv::{self, LocusLog};
 use locus_logs::mrclam::{Dataset, Groundtruth, Odometry, TruthPose};
-pub use locus_logs::{BeamSensor, Landmark, Lines, NoiseRecords, Scans, SensorMount, Sighting};
+pub use locus_logs::{
+    BeamSensor, IrPairRecord, Landmark, Lines, NoiseRecords, Scans, SensorMount, Sighting,
+};
 pub use locus_map::Map;
 
 mod files;
@@ -103,6 +105,9 @@ pub struct Log {
     pub beam_sensors: Vec<BeamSensor>,
     /// Their scans, in non-decreasing time order.
     pub scans: Scans,
+    /// Beam sensors read as paper 001's IR pair (version 5): their scans
+    /// of one instant are one correction of the pose, not two.
+    pub ir_pairs: Vec<IrPairRecord>,
 }
 
 /// A record refused as implausible, with its line.
@@ -283,6 +288,7 @@ impl Log {
             map_file: None,
             beam_sensors: Vec::new(),
             scans: Scans::default(),
+            ir_pairs: Vec::new(),
         })
     }
 
@@ -438,6 +444,7 @@ impl Log {
             map_file,
             beam_sensors: log.beam_sensors,
             scans: log.scans,
+            ir_pairs: log.ir_pairs,
         })
     }
 
@@ -520,6 +527,7 @@ impl Log {
             map: self.map_file.clone(),
             beam_sensors: self.beam_sensors.clone(),
             scans: self.scans.clone(),
+            ir_pairs: self.ir_pairs.clone(),
         }
     }
 
