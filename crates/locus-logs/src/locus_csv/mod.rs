@@ -30,8 +30,9 @@
 //! unique, a `scan` names a beam sensor declared above it and gives one
 //! range per beam; scan times do not decrease. Version 5: an `ir_pair`
 //! names two one-beam sensors declared above it that form paper 001's pair
-//! ([`IrPairRecord::check`]), each sensor in one pair at most. Errors name
-//! the file, line, column and field.
+//! ([`IrPairRecord::sensor_problem`], [`IrPairRecord::pair_problem`]),
+//! each sensor in one pair at most. Errors name the file, line, column and
+//! field.
 
 use std::path::{Path, PathBuf};
 
