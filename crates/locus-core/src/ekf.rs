@@ -15,7 +15,7 @@
 use nalgebra::{SMatrix, SVector};
 
 use crate::belief::{all_finite, all_finite_pair, finite};
-use crate::linalg::{mul, mul_bt, sandwich, spd_inverse};
+use crate::linalg::{joseph, mul, mul_bt, sandwich, spd_inverse};
 use crate::{Belief, ChiSquareGate, Error, Input, MeasurementModel, MotionModel, Scalar};
 
 /// How the corrected covariance `P+` is computed.
@@ -233,10 +233,7 @@ impl<T: Scalar> Ekf<T> {
         let x = belief.x + pht * y;
         let g = pht * s_inv;
         let p_post = match self.update {
-            CovarianceUpdate::Joseph => {
-                let ikh = SMatrix::<T, N, N>::identity() - mul(&g, &lin.h);
-                sandwich(&ikh, p) + sandwich(&g, &lin.r)
-            }
+            CovarianceUpdate::Joseph => joseph(p, &pht, &lin.h, &g, &lin.r),
             CovarianceUpdate::Plain => p - mul_bt(&g, &pht),
             CovarianceUpdate::ForcedSymmetric => symmetrise(p - mul_bt(&g, &pht)),
         };

@@ -71,6 +71,39 @@ pub(crate) fn sandwich<T: Scalar, const R: usize, const K: usize>(
     out
 }
 
+/// The Joseph form `(I - G H) P (I - G H)^T + G R G^T` of a correction
+/// of gain `G` (`N x M`), given `P H^T` (`pht`): `A = (I - G H) P = P - G
+/// (P H^T)^T` (`P` symmetric), then `A (I - G H)^T = A - (A H^T) G^T`, then
+/// `+ G R G^T`, the upper triangle mirrored onto the lower. The same
+/// product grouped as rank-`M` updates: `3 N^2 M` multiplications where
+/// the `N x N` products take `2 N^3` (8 states, one reading: 192 against
+/// 1024), and still the sum of `(I - G H) P (I - G H)^T` and `G R G^T`
+/// whatever the gain's rounding, which is what the Joseph form is for.
+#[inline(always)]
+pub(crate) fn joseph<T: Scalar, const N: usize, const M: usize>(
+    p: &SMatrix<T, N, N>,
+    pht: &SMatrix<T, N, M>,
+    h: &SMatrix<T, M, N>,
+    g: &SMatrix<T, N, M>,
+    r: &SMatrix<T, M, M>,
+) -> SMatrix<T, N, N> {
+    let a = p - mul_bt(g, pht);
+    let aht = mul_bt(&a, h);
+    let grg = mul(g, r);
+    let mut out = SMatrix::<T, N, N>::zeros();
+    for j in 0..N {
+        for i in 0..=j {
+            let mut acc = a[(i, j)];
+            for k in 0..M {
+                acc += grg[(i, k)] * g[(j, k)] - aht[(i, k)] * g[(j, k)];
+            }
+            out[(i, j)] = acc;
+            out[(j, i)] = acc;
+        }
+    }
+    out
+}
+
 /// The inverse of a symmetric positive-definite matrix, or `None` if it is
 /// not positive definite, numerically singular (a pivot or determinant below
 /// machine epsilon relative to its diagonal) or not finite. Closed form for 1x1 and 2x2
@@ -185,5 +218,35 @@ mod tests {
         assert_eq!(mul(&a, &p), a * p);
         assert_eq!(mul_bt(&a, &p), a * p.transpose());
         assert!((sandwich(&a, &p) - a * p * a.transpose()).amax() < 1e-14);
+    }
+
+    /// The grouped Joseph form equals the product written out, for any
+    /// gain (the optimal one and one off by a tenth), with one reading
+    /// and two, and is exactly symmetric.
+    #[test]
+    fn joseph_is_the_product_written_out() {
+        use nalgebra::{SMatrix, SVector};
+        let p = SMatrix::<f64, 4, 4>::from_fn(|i, j| {
+            let v = SVector::<f64, 4>::from([1.0, 0.5, -0.3, 0.2]);
+            0.1 * v[i] * v[j] + if i == j { 1.0 + i as f64 } else { 0.0 }
+        });
+        let h2 = SMatrix::<f64, 2, 4>::new(1.0, 0.0, 0.5, 0.0, 0.0, -1.0, 0.2, 0.3);
+        let r2 = Matrix2::new(0.04, 0.01, 0.01, 0.09);
+        let pht = p * h2.transpose();
+        let optimal = pht * (h2 * pht + r2).try_inverse().unwrap();
+        for g in [optimal, optimal * 1.1] {
+            let ikh = SMatrix::<f64, 4, 4>::identity() - g * h2;
+            let written = ikh * p * ikh.transpose() + g * r2 * g.transpose();
+            let grouped = joseph(&p, &pht, &h2, &g, &r2);
+            assert!((grouped - written).amax() < 1e-14, "{grouped} {written}");
+            assert_eq!(grouped, grouped.transpose());
+        }
+        let h1 = h2.fixed_rows::<1>(1).into_owned();
+        let r1 = nalgebra::Matrix1::new(0.09);
+        let pht = p * h1.transpose();
+        let g = pht / (h1 * pht + r1)[(0, 0)];
+        let ikh = SMatrix::<f64, 4, 4>::identity() - g * h1;
+        let written = ikh * p * ikh.transpose() + g * r1 * g.transpose();
+        assert!((joseph(&p, &pht, &h1, &g, &r1) - written).amax() < 1e-14);
     }
 }

@@ -44,12 +44,12 @@ pub static ARENA: [Segment<f32>; 4] = [
 ];
 
 /// The simulator's `f64` EKF estimate `[x, y, theta]` after the last step.
-pub const SIM_ESTIMATE: [f64; 3] = [0.8499681000933748, 0.37996039559701655, 1.5688073485644636];
+pub const SIM_ESTIMATE: [f64; 3] = [0.8499681000933748, 0.37996039559701644, 1.5688073485644636];
 /// The simulator's decoded counts `[right, left]` after the last step
 /// (sums of the per-step counts; the decoders' 20-bit counters wrap them).
 pub const SIM_COUNTS: [i64; 2] = [6264, 5875];
 /// The true pose `[x, y, theta]` after the last step.
-pub const TRUTH: [f64; 3] = [0.8417667202376793, 0.3686317736155806, 1.600514820143064];
+pub const TRUTH: [f64; 3] = [0.8417667202376796, 0.3686317736155807, 1.6005148201430637];
 
 /// Per step, the 8 samples of the channel levels (nibble `j` = sample `j`:
 /// bit 0 right A, bit 1 right B, bit 2 left A, bit 3 left B).
