@@ -7,9 +7,11 @@
 #   synthesis  Yosys synth_ecp5, multiplications mapped to MULT18X18D;
 #   placement and routing  nextpnr-ecp5, seeded (SEED, default 1), so that
 #              its figures repeat, against a FREQ MHz clock (default 50);
-#   report     LUT4, flip-flops, MULT18X18D and nextpnr's Fmax for `clk`,
-#              and the time per correction at the cycle count of
-#              `locus hw` (99 cycles) beside the papers' 2.08 us.
+#   report     LUT4, flip-flops, MULT18X18D and nextpnr's Fmax for `clk`;
+#              `locus hw --pnr OUT` prints them with the time per
+#              correction at the cycle model's count for the units'
+#              latencies (hdl/fp/fp_latency.vh), beside the papers' 2.08 us
+#              (or give CYCLES to have this script print that time).
 # Area beside the papers' 22 089 logic elements is counted as LUT4 plus the
 # flip-flops that a LUT4 cannot absorb (FF - LUT4 when positive): an
 # element is one LUT4 and one flip-flop, as a Cyclone IV LE is.
@@ -23,7 +25,7 @@ ROOT=$PWD
 OUT=${1:-target/hw-pnr}
 SEED=${SEED:-1}
 FREQ=${FREQ:-50}
-CYCLES=${CYCLES:-99}
+CYCLES=${CYCLES:-}
 VENV=${HW_VENV:-target/hw-venv}
 PY=${LOCUS_PYTHON:-python3}
 
@@ -53,14 +55,14 @@ avail = {k: v["available"] for k, v in r["utilization"].items()}
 lut, ff, mult = used.get("TRELLIS_COMB", 0), used.get("TRELLIS_FF", 0), used.get("MULT18X18D", 0)
 # The core has one clock; with several, the slowest.
 fmax = min((v["achieved"] for v in r.get("fmax", {}).values()), default=None)
-cycles = int(os.environ["CYCLES"])
+cycles = int(os.environ["CYCLES"]) if os.environ["CYCLES"] else None
 les = lut + max(0, ff - lut)
-t = "n/a" if not fmax else f"{cycles / fmax:.3f} us"
+t = "n/a" if not (fmax and cycles) else f"{cycles / fmax:.3f} us"
 print(f"\nLFE5U-85F-6 CABGA381, nextpnr seed {os.environ['SEED']}; synthesis {os.environ['SYNTH_S']} s, "
       f"place and route {os.environ['PNR_S']} s")
 print("| | cycles | Fmax | time per correction | LUT4 | flip-flops | LE-equivalent | multipliers |")
 print("|---|---|---|---|---|---|---|---|")
-print(f"| this core | {cycles} | {'n/a' if not fmax else f'{fmax:.2f} MHz'} | {t} | {lut} of {avail.get('TRELLIS_COMB')} "
+print(f"| this core | {cycles or 'see locus hw --pnr'} | {'n/a' if not fmax else f'{fmax:.2f} MHz'} | {t} | {lut} of {avail.get('TRELLIS_COMB')} "
       f"| {ff} | {les} | {mult} MULT18X18D |")
 print("| papers 000/003 (Cyclone IV E, Quartus II) | 104 | 49.08 MHz | 2.08 us | - | - | 22 089 LEs | 175 9x9 (about 87 18x18) |")
 PYEOF

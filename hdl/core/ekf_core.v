@@ -245,10 +245,10 @@ module ekf_core (
                 endcase
             end
 
-            fp_mul mul (.clk(clk), .a(oa), .b(ob), .y(mul_y));
-            fp_add add (.clk(clk), .a(add_a), .b(add_b), .sub(add_sub), .y(add_y));
+            fp_mul mul (.clk(clk), .a_in(oa), .b_in(ob), .y(mul_y));
+            fp_add add (.clk(clk), .a_in(add_a), .b_in(add_b), .sub_in(add_sub), .y(add_y));
             if (e < 4) begin : with_div
-                fp_div div (.clk(clk), .a(oa), .b(ob), .y(div_y));
+                fp_div div (.clk(clk), .a_in(oa), .b_in(ob), .y(div_y));
             end else begin : no_div
                 assign div_y = 32'd0;
             end

@@ -2,9 +2,10 @@
 //
 // Round to nearest, ties to even; subnormal inputs and results (gradual
 // underflow); x + (-x) = +0; any NaN operand or inf - inf gives the
-// canonical quiet NaN 0x7FC00000. Pipelined with latency `FP_ADD_LAT (3,
+// canonical quiet NaN 0x7FC00000. Pipelined with latency `FP_ADD_LAT (4,
 // see fp_latency.vh for the edge at which y appears), one operation per
 // clock:
+//   stage 0: the operands registered;
 //   stage 1: classify, order the operands by magnitude, align the smaller
 //            one (guard, round and sticky bits);
 //   stage 2: add or subtract the significands, count leading zeros;
@@ -13,12 +14,25 @@
 
 module fp_add (
     input  wire        clk,
-    input  wire [31:0] a,
-    input  wire [31:0] b,
-    input  wire        sub,
+    input  wire [31:0] a_in,
+    input  wire [31:0] b_in,
+    input  wire        sub_in,
     output wire [31:0] y
 );
 `include "fp_common.vh"
+
+    // ---- stage 0: the operands registered ----
+    // The core's operand multiplexers end at these registers, so that no
+    // path runs from its schedule through a multiplexer into this unit's
+    // logic.
+    reg [31:0] a;
+    reg [31:0] b;
+    reg sub;
+    always @(posedge clk) begin
+        a <= a_in;
+        b <= b_in;
+        sub <= sub_in;
+    end
 
     // Each stage is one clocked block: its combinational logic is written
     // with blocking assignments to temporaries (assigned before use on every

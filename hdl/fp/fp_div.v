@@ -4,8 +4,9 @@
 // underflow); the sign of a quotient is the XOR of the operands' signs;
 // x / 0 = inf for finite nonzero x, x / inf = 0 for finite x; any NaN
 // operand, 0 / 0 and inf / inf give the canonical quiet NaN 0x7FC00000.
-// Pipelined with latency `FP_DIV_LAT (8, see fp_latency.vh for the edge at
+// Pipelined with latency `FP_DIV_LAT (9, see fp_latency.vh for the edge at
 // which y appears), one operation per clock:
+//   stage 0:    the operands registered;
 //   stage 1:    classify, unpack (subnormals normalised), pre-shift the
 //               dividend's significand so that the quotient is in [1, 2);
 //   stages 2-7: restoring division, QB quotient bits per stage
@@ -15,11 +16,22 @@
 
 module fp_div (
     input  wire        clk,
-    input  wire [31:0] a,
-    input  wire [31:0] b,
+    input  wire [31:0] a_in,
+    input  wire [31:0] b_in,
     output wire [31:0] y
 );
 `include "fp_common.vh"
+
+    // ---- stage 0: the operands registered ----
+    // The core's operand multiplexers end at these registers, so that no
+    // path runs from its schedule through a multiplexer into this unit's
+    // logic.
+    reg [31:0] a;
+    reg [31:0] b;
+    always @(posedge clk) begin
+        a <= a_in;
+        b <= b_in;
+    end
 
     localparam QB = 5;       // quotient bits per division stage (unrolled below)
     localparam NS = 6;       // division stages

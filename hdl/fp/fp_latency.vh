@@ -8,7 +8,7 @@
 // before every edge.
 `ifndef FP_LATENCY_VH
 `define FP_LATENCY_VH
-`define FP_MUL_LAT 2
-`define FP_ADD_LAT 3
-`define FP_DIV_LAT 8
+`define FP_MUL_LAT 3
+`define FP_ADD_LAT 4
+`define FP_DIV_LAT 9
 `endif

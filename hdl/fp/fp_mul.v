@@ -3,19 +3,31 @@
 // Round to nearest, ties to even; subnormal inputs and results (gradual
 // underflow); the sign of a product is the XOR of the operands' signs,
 // zeros included; any NaN operand or 0 * inf gives the canonical quiet NaN
-// 0x7FC00000. Pipelined with latency `FP_MUL_LAT (2, see fp_latency.vh for
+// 0x7FC00000. Pipelined with latency `FP_MUL_LAT (3, see fp_latency.vh for
 // the edge at which y appears), one operation per clock:
+//   stage 0: the operands registered;
 //   stage 1: classify, unpack (subnormals normalised), 24x24 product;
 //   stage 2: normalise by at most one bit, round, pack.
 `include "fp_latency.vh"
 
 module fp_mul (
     input  wire        clk,
-    input  wire [31:0] a,
-    input  wire [31:0] b,
+    input  wire [31:0] a_in,
+    input  wire [31:0] b_in,
     output wire [31:0] y
 );
 `include "fp_common.vh"
+
+    // ---- stage 0: the operands registered ----
+    // The core's operand multiplexers end at these registers, so that no
+    // path runs from its schedule through a multiplexer into this unit's
+    // logic.
+    reg [31:0] a;
+    reg [31:0] b;
+    always @(posedge clk) begin
+        a <= a_in;
+        b <= b_in;
+    end
 
     // Each stage is one clocked block: its combinational logic is written
     // with blocking assignments to temporaries (assigned before use on every

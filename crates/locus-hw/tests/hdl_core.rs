@@ -38,6 +38,7 @@ fn the_core_is_bit_exact_and_takes_the_models_cycles() {
         (report.cycles_min, report.cycles_max),
         (model.cycles, model.cycles)
     );
+    println!("per state: {:?}", report.cycles_per_state());
     assert_eq!(report.cycles_per_state(), model.cycles_per_state());
 }
 

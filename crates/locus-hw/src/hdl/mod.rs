@@ -5,8 +5,8 @@
 //! * `hdl/fp/`: pipelined IEEE 754 binary32 units `fp_add` (with a `sub`
 //!   input), `fp_mul` and `fp_div`, their shared functions `fp_common.vh`
 //!   (unpack with subnormal normalisation, round to nearest even and pack
-//!   with gradual underflow) and their latencies `fp_latency.vh` (add 3,
-//!   mul 2, div 8 cycles: `y` holds the result of the operands sampled at
+//!   with gradual underflow) and their latencies `fp_latency.vh` (add 4,
+//!   mul 3, div 9 cycles, each with its operands registered first: `y` holds the result of the operands sampled at
 //!   rising edge `t` from just after edge `t + L - 1`, one operation per
 //!   clock);
 //! * `hdl/tb/tb_fp.v`: one testbench for the three units, fed with a vector
