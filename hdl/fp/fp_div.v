@@ -22,10 +22,7 @@ module fp_div (
 );
 `include "fp_common.vh"
 
-    // ---- stage 0: the operands registered ----
-    // The core's operand multiplexers end at these registers, so that no
-    // path runs from its schedule through a multiplexer into this unit's
-    // logic.
+    // ---- stage 0: the operands registered (fp_latency.vh says why) ----
     reg [31:0] a;
     reg [31:0] b;
     always @(posedge clk) begin
