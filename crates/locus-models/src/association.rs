@@ -27,14 +27,7 @@ pub fn associate_ir_wall<T: Scalar>(
     map: &[Segment<T>],
     gate_range: T,
 ) -> Option<AxisWall<T>> {
-    let (s, c) = x[2].sin_cos();
-    // Pair centre: `forward_offset` ahead, `lateral_offset` to the right.
-    let origin = Vector2::new(
-        x[0] + pair.forward_offset * c + pair.lateral_offset * s,
-        x[1] + pair.forward_offset * s - pair.lateral_offset * c,
-    );
-    // Sensing direction: to the right of the heading.
-    let dir = Vector2::new(s, -c);
+    let (origin, dir) = pair.sensing_ray(x);
     let hit = ray_cast(&origin, &dir, map, &BeamLimits::with_max_range(gate_range))?;
     let seg = &map[hit.segment];
     axis_wall(seg.a, seg.b, &dir)

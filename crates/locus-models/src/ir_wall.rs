@@ -142,6 +142,19 @@ impl<T: Scalar> IrPair<T> {
         }
     }
 
+    /// The pair's sensing ray at the pose `[x, y, theta]` (m, m, rad): its
+    /// origin, the pair's centre (`forward_offset` ahead, `lateral_offset`
+    /// to the right), and its unit direction, to the right of the heading.
+    /// Data association casts it in the map ([`crate::associate_ir_wall`]).
+    pub fn sensing_ray(&self, x: &SVector<T, 3>) -> (Vector2<T>, Vector2<T>) {
+        let (s, c) = x[2].sin_cos();
+        let origin = Vector2::new(
+            x[0] + self.forward_offset * c + self.lateral_offset * s,
+            x[1] + self.forward_offset * s - self.lateral_offset * c,
+        );
+        (origin, Vector2::new(s, -c))
+    }
+
     /// `(ObsAng, D)`: the angle of the wall relative to the sensing direction
     /// (rad) and the distance from the robot centre to the wall (m), from the
     /// two readings (eq. 3 with the offsets).

@@ -24,27 +24,30 @@
 //! counted on the first. A map of occupancy cells has no walls to
 //! associate with: there the pair's sensors are corrected beam by beam.
 
-use locus_core::nalgebra::{SMatrix, Vector2};
+use locus_core::nalgebra::SMatrix;
 use locus_core::{Rules, StudentT, Update};
 use locus_logs::IrPairRecord;
 use locus_logs::scans::Reading;
-use locus_map::{HitSource, Map};
+use locus_map::{HitSource, Map, SegmentMap};
 use locus_models::on_pose::OnPose;
 use locus_models::{IrPair, IrPairObservation, axis_wall};
 
 use crate::filter::{NIS_CAP, State};
 use crate::{Config, Log, ScanOutcome, Unusable};
 
-/// The IR pair scan `index` belongs to, if its sensor is one of a pair and
-/// the map is of walls (the pair's association needs walls).
-pub(crate) fn pair_of(log: &Log, index: usize) -> Option<&IrPairRecord> {
+/// The IR pair scan `index` belongs to, if its sensor is one of a pair,
+/// with the log's walls (the pair's association needs walls; a map of
+/// cells has none).
+pub(crate) fn pair_of(log: &Log, index: usize) -> Option<(&IrPairRecord, &SegmentMap)> {
     let sensor = log.scans.get(index)?.sensor;
-    if !matches!(log.map.as_deref(), Some(Map::Segments(_))) {
+    let Some(Map::Segments(walls)) = log.map.as_deref() else {
         return None;
-    }
-    log.ir_pairs
+    };
+    let pair = log
+        .ir_pairs
         .iter()
-        .find(|p| p.front == sensor || p.rear == sensor)
+        .find(|p| p.front == sensor || p.rear == sensor)?;
+    Some((pair, walls))
 }
 
 /// Corrects `track` with the pair `pair` at its scan `index` (module doc);
@@ -56,10 +59,9 @@ pub(crate) fn correct(
     track: &mut State,
     out: &mut ScanOutcome,
     index: usize,
-    pair: &IrPairRecord,
+    (pair, walls): (&IrPairRecord, &SegmentMap),
 ) -> Result<f64, locus_core::Error> {
-    let (Some(scan), Some(Map::Segments(walls))) = (log.scans.get(index), log.map.as_deref())
-    else {
+    let Some(scan) = log.scans.get(index) else {
         return Ok(0.0);
     };
     if scan.sensor != pair.front.min(pair.rear) {
@@ -102,17 +104,11 @@ pub(crate) fn correct(
         lateral_offset,
         forward_offset,
     };
-    // The pair's centre and its sensing ray, to the right of the heading
-    // (as `associate_ir_wall`).
     let x = track.belief.x;
-    let (s, c) = x[2].sin_cos();
-    let origin = [
-        x[0] + forward_offset * c + lateral_offset * s,
-        x[1] + forward_offset * s - lateral_offset * c,
-    ];
+    let (origin, dir) = geometry.sensing_ray(&x.fixed_rows::<3>(0).into_owned());
     let wall = walls
         .cast(
-            origin,
+            origin.into(),
             x[2] - core::f64::consts::FRAC_PI_2,
             pair.association_range,
         )
@@ -122,7 +118,7 @@ pub(crate) fn correct(
         })
         .and_then(|seg| {
             let [x1, y1, x2, y2]: [f64; 4] = seg.into();
-            axis_wall([x1, y1], [x2, y2], &Vector2::new(s, -c))
+            axis_wall([x1, y1], [x2, y2], &dir)
         });
     let Some(wall) = wall else {
         out.no_surface += 2;
