@@ -16,9 +16,10 @@
 //! duration over a replay's time is its real-time factor.
 //!
 //! Then, group `intel_scan_180`, one scan per iteration at the scans'
-//! corrected poses in turn, the beam loop of the replay's `filter.rs`
-//! rebuilt through the public API (the same calls: `Map::cast` from the
-//! sensor, `PlanarBeam`, the short-reading test, the running filter's
+//! corrected poses in turn, the beam loop of the replay's `filter.rs` on
+//! a scan it could not align, through the replay's own functions
+//! (`locus_replay::beam`: the cast from the sensor, the plane linearised
+//! at the estimate, the short-reading test; then the running filter's
 //! Student-t correction behind the 99 % gate, no recovery) to split a
 //! scan's time: the casts alone (the beams with a return), the updates
 //! alone (the planes cast beforehand), and both.
@@ -32,15 +33,14 @@ use core::hint::black_box;
 use std::path::{Path, PathBuf};
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use locus_core::nalgebra::{SMatrix, SVector, Vector2};
-use locus_core::{
-    Belief, ChiSquareGate, Ekf, MeasurementModel as _, Rules, StudentT, Track, Update,
-};
+use locus_core::nalgebra::{SMatrix, SVector};
+use locus_core::{Belief, ChiSquareGate, Ekf, Rules, StudentT, Track, Update};
 use locus_logs::BeamSensor;
 use locus_logs::scans::Reading as Stored;
 use locus_map::{BuilderConfig, GridBuilder, GridGeometry, Map, Reading};
 use locus_models::calibrated_unicycle::{RANGE_BIAS, V_SCALE};
-use locus_models::planar_beam::{BeamMount, PlanarBeam};
+use locus_models::planar_beam::PlanarBeam;
+use locus_replay::beam::{self, Beam};
 use locus_replay::log::{Scans, SharedMap};
 use locus_replay::{Beams, Config, Log, STATE, replay};
 
@@ -128,8 +128,9 @@ enum Did {
     Gated,
 }
 
-/// The replay's beam loop (`filter.rs`, `scan_correct` and `beam_model`)
-/// rebuilt through the public API, for one scan at a time.
+/// The replay's beam loop (`filter.rs`, `scan_correct`, on a scan it
+/// could not align) through the functions it calls
+/// ([`locus_replay::beam`]), for one scan at a time.
 struct Replica<'a> {
     map: &'a Map,
     sensor: BeamSensor,
@@ -142,57 +143,41 @@ struct Replica<'a> {
 impl Replica<'_> {
     /// Beam `k`'s plane at the state `x`; `None` where the cast meets
     /// nothing usable.
-    fn plane(&self, k: u32, x: &SVector<f64, STATE>) -> Option<PlanarBeam<f64>> {
-        let (sin, cos) = x[2].sin_cos();
-        let m = self.sensor.mount;
-        let origin = [x[0] + cos * m.x - sin * m.y, x[1] + sin * m.x + cos * m.y];
-        let angle = m.yaw + self.sensor.angle(k);
-        let hit = self
-            .map
-            .cast(origin, x[2] + angle, self.sensor.max_range)
-            .filter(|h| h.incidence <= self.beams.max_incidence)?;
-        Some(PlanarBeam {
-            mount: BeamMount {
-                position: Vector2::new(m.x, m.y),
-                angle,
-            },
-            point: Vector2::new(hit.point[0], hit.point[1]),
-            normal: Vector2::new(hit.normal[0], hit.normal[1]),
-            var_range: self.beams.sigma * self.beams.sigma,
-            min_range: self.sensor.min_range,
-            max_incidence: self.beams.max_incidence,
-        })
+    fn plane(&self, k: usize, x: &SVector<f64, STATE>) -> Option<PlanarBeam<f64>> {
+        beam::beam_model(self.map, &self.sensor, k, x, &self.beams)
     }
 
-    /// One beam's update against `model`: the short-reading test, then
-    /// the Student-t correction behind the gate.
-    fn update(&self, track: &mut Track<f64, STATE>, model: &PlanarBeam<f64>, z: f64) -> Did {
-        let x = &track.belief.x;
-        let mut h = SMatrix::<f64, 1, STATE>::zeros();
-        let Some(predicted) = model.evaluate(x, Some(&mut h)) else {
+    /// One beam's correction after it was judged.
+    fn correct(&self, track: &mut Track<f64, STATE>, judged: Beam, z: f64) -> Did {
+        let Beam::Usable { model, .. } = judged else {
             return Did::Skipped;
         };
-        let s = (h * track.belief.p * h.transpose())[(0, 0)] + model.var_range;
-        if z - predicted[0] < -self.beams.short_sigma * s.sqrt() {
-            return Did::Skipped;
-        }
         let z = SVector::<f64, 1>::new(z);
-        match track.correct_robust(&self.rules, &self.robust, model, &z) {
+        match track.correct_robust(&self.rules, &self.robust, &model, &z) {
             Ok(Update::Applied { weight, .. }) if weight < 1.0 => Did::DownWeighted,
             Ok(Update::Applied { .. }) => Did::Applied,
             _ => Did::Gated,
         }
     }
 
+    /// One beam's update against the plane `model` it met: judged at the
+    /// estimate (linearised, the short-reading test), then the Student-t
+    /// correction behind the gate.
+    fn update(&self, track: &mut Track<f64, STATE>, model: &PlanarBeam<f64>, z: f64) -> Did {
+        let x = track.belief.x;
+        let judged = beam::judge(model, z, &x, &x, &track.belief.p, &self.beams);
+        self.correct(track, judged, z)
+    }
+
     /// A scan's beams with a return, each cast from the estimate the one
     /// before left, then updated; `did` told what each did.
     fn scan(&self, track: &mut Track<f64, STATE>, ranges: &[f32], mut did: impl FnMut(Did)) {
-        for (k, &r) in (0u32..).zip(ranges) {
+        for (k, &r) in ranges.iter().enumerate() {
             let Some(z) = range(r) else { continue };
-            match self.plane(k, black_box(&track.belief.x)) {
-                Some(m) => did(self.update(track, &m, z)),
-                None => did(Did::Skipped),
-            }
+            let x = *black_box(&track.belief.x);
+            let p = &track.belief.p;
+            let judged = beam::beam(self.map, &self.sensor, k, z, &x, &x, p, &self.beams);
+            did(self.correct(track, judged, z));
         }
     }
 }
@@ -303,8 +288,9 @@ fn bench(c: &mut Criterion) {
         .iter()
         .zip(&tracks)
         .map(|(scan, t)| {
-            (0u32..)
-                .zip(scan.ranges)
+            scan.ranges
+                .iter()
+                .enumerate()
                 .filter_map(|(k, &r)| Some((replica.plane(k, &t.belief.x)?, range(r)?)))
                 .collect()
         })
@@ -356,7 +342,7 @@ fn bench(c: &mut Criterion) {
             let x = &tracks[k % scans].belief.x;
             k += 1;
             let mut sum = 0.0;
-            for (j, &r) in (0u32..).zip(scan.ranges) {
+            for (j, &r) in scan.ranges.iter().enumerate() {
                 if range(r).is_some() {
                     sum += replica.plane(j, black_box(x)).map_or(0.0, |m| m.point[0]);
                 }

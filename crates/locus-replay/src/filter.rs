@@ -24,12 +24,11 @@ use locus_core::{
 use locus_models::calibrated_range::CalibratedRange;
 use locus_models::calibrated_range_bearing::CalibratedRangeBearing;
 use locus_models::calibrated_unicycle::{BEARING_BIAS, OMEGA_BIAS, OMEGA_SCALE, V_SCALE};
-use locus_models::planar_beam::{BeamMount, PlanarBeam};
 use locus_models::range_bearing::RangeBearing;
 use locus_models::unicycle::{Unicycle, Velocities};
 
+use crate::beam::{Beam, beam};
 use crate::event::{Entry, Event};
-use crate::linearised_at::LinearisedAt;
 use crate::{Config, Log, ScanOutcome, SightingOutcome, Unusable};
 
 /// Cap on one sighting's NIS in
@@ -159,7 +158,7 @@ pub(crate) fn apply(
 /// the other (papers 000/003: each beam one scalar update), or as paper
 /// 001's IR pair if the log declares its sensor one (`ir_pair.rs`): the beam cast
 /// in the log's map from the current estimate gives the surface it should
-/// see, [`PlanarBeam`] the range to it and its Jacobian. A beam with no
+/// see, [`PlanarBeam`](locus_models::planar_beam::PlanarBeam) the range to it and its Jacobian. A beam with no
 /// return, no surface in range (or one met grazing), or a reading far
 /// shorter than the map's (something not in the map) is skipped; the rest
 /// are Student-t weighted and gated as sightings are, with no covariance
@@ -278,96 +277,6 @@ fn scan_correct(
 pub(crate) fn chosen_beams(count: usize, per_scan: u32) -> impl Iterator<Item = usize> {
     let chosen = count.min(per_scan as usize);
     (0..chosen).map(move |j| (2 * j + 1) * count / (2 * chosen))
-}
-
-/// What one beam reading gives (`beam`).
-// Returned by value once per beam and matched at once, never stored.
-#[allow(clippy::large_enum_variant)]
-pub(crate) enum Beam {
-    /// Its cast meets no surface within range, or meets it grazing or
-    /// from behind.
-    NoSurface,
-    /// It reads shorter than the surface by more than
-    /// [`Beams::short_sigma`](crate::Beams::short_sigma) standard
-    /// deviations of its innovation (variance `s`, m^2): something not in
-    /// the map.
-    Short { s: f64 },
-    /// It can correct: the model (its Jacobian `model.h`) and its residual
-    /// (reading minus predicted, m).
-    Usable { model: LinearisedAt, residual: f64 },
-}
-
-/// Beam `k` of `sensor`, reading `z` (m), cast in `map` from the state
-/// `from` and linearised there ([`LinearisedAt`]), then judged at the
-/// state `x` of covariance `p`: the surface it meets ([`beam_model`]), the
-/// range predicted at `x` and whether the reading is far too short for it.
-/// The beam loop (`scan_correct`: `from` the scan's alignment, else `x`)
-/// and the scan's alignment (`scan_align.rs`: `from` and `x` its iterate)
-/// judge a beam alike through it.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn beam(
-    map: &locus_map::Map,
-    sensor: &locus_logs::BeamSensor,
-    k: usize,
-    z: f64,
-    from: &StateVector,
-    x: &StateVector,
-    p: &StateMatrix,
-    beams: &crate::Beams,
-) -> Beam {
-    let Some(planar) = beam_model(map, sensor, k, from, beams) else {
-        return Beam::NoSurface;
-    };
-    let mut h = SMatrix::<f64, 1, STATE>::zeros();
-    let Some(h0) = planar.evaluate(from, Some(&mut h)) else {
-        return Beam::NoSurface;
-    };
-    let model = LinearisedAt {
-        h0: h0[0],
-        h,
-        at: *from,
-        var: planar.var_range,
-    };
-    let Some(predicted) = model.h(x) else {
-        return Beam::NoSurface;
-    };
-    let s = (h * p * h.transpose())[(0, 0)] + model.var;
-    let residual = z - predicted[0];
-    if residual < -beams.short_sigma * s.sqrt() {
-        return Beam::Short { s };
-    }
-    Beam::Usable { model, residual }
-}
-
-/// Beam `k` of `sensor` at the state `x`: cast in `map` from the sensor,
-/// the surface it meets (within the sensor's range, at an incidence of at
-/// most `beams.max_incidence`) as a [`PlanarBeam`]; `None` where it meets
-/// none.
-pub(crate) fn beam_model(
-    map: &locus_map::Map,
-    sensor: &locus_logs::BeamSensor,
-    k: usize,
-    x: &StateVector,
-    beams: &crate::Beams,
-) -> Option<PlanarBeam<f64>> {
-    let (sin, cos) = x[2].sin_cos();
-    let m = sensor.mount;
-    let origin = [x[0] + cos * m.x - sin * m.y, x[1] + sin * m.x + cos * m.y];
-    let angle_on_robot = m.yaw + sensor.angle(u32::try_from(k).unwrap_or(u32::MAX));
-    let hit = map
-        .cast(origin, x[2] + angle_on_robot, sensor.max_range)
-        .filter(|h| h.incidence <= beams.max_incidence)?;
-    Some(PlanarBeam {
-        mount: BeamMount {
-            position: Vector2::new(m.x, m.y),
-            angle: angle_on_robot,
-        },
-        point: Vector2::new(hit.point[0], hit.point[1]),
-        normal: Vector2::new(hit.normal[0], hit.normal[1]),
-        var_range: beams.sigma * beams.sigma,
-        min_range: sensor.min_range,
-        max_incidence: beams.max_incidence,
-    })
 }
 
 /// Corrects `track` with one sighting `z` of `M` components (range and

@@ -70,6 +70,7 @@
 
 extern crate alloc;
 
+pub mod beam;
 mod config;
 pub mod csv_out;
 mod dead_reckoning;

@@ -17,7 +17,7 @@ use crate::filter::{STATE, StateVector};
 /// `h(x) = h0 + H (x - at)`, the heading difference wrapped, with noise
 /// variance `var`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct LinearisedAt {
+pub struct LinearisedAt {
     /// `h(at)`.
     pub h0: f64,
     /// `H = dh/dx` at `at`.

@@ -59,7 +59,8 @@ use locus_map::Map;
 use locus_models::calibrated_unicycle::RANGE_BIAS;
 
 use crate::Beams;
-use crate::filter::{Beam, StateMatrix, StateVector, beam, chosen_beams};
+use crate::beam::{Beam, beam};
+use crate::filter::{StateMatrix, StateVector, chosen_beams};
 
 /// The states the alignment moves: the pose and the beams' range bias,
 /// which every beam reads (a range error the scan's beams share is the

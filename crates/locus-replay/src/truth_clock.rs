@@ -82,7 +82,7 @@ fn residuals(log: &Log, cfg: &Config, offset: f64, out: &mut Vec<f64>) {
                 let Reading::Range(z) = Reading::of(scan.ranges[k]) else {
                     continue;
                 };
-                let Some(model) = crate::filter::beam_model(map, sensor, k, &x, &cfg.beams) else {
+                let Some(model) = crate::beam::beam_model(map, sensor, k, &x, &cfg.beams) else {
                     continue;
                 };
                 if let Some(h) = model.h(&x) {

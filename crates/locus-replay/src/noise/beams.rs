@@ -49,8 +49,7 @@ pub(super) fn beam_noise(log: &Log, cfg: &Config, scans: &[KeptScan]) -> (f64, f
             let Reading::Range(z) = Reading::of(scan.ranges[b]) else {
                 continue;
             };
-            let Some(model) = crate::filter::beam_model(map, sensor, b, &k.state, &cfg.beams)
-            else {
+            let Some(model) = crate::beam::beam_model(map, sensor, b, &k.state, &cfg.beams) else {
                 continue;
             };
             let Some(h) = model.h(&k.state) else { continue };
