@@ -4,10 +4,12 @@
 //   5 G = O1 O4        6 O5 = z - h(X-)  7 O6 = G O5       8 X+ = X- + O6
 //   9 O7 = G H        10 O8 = O7 P-     11 P+ = P- - O8
 // on nine datapaths (one per element of the largest, 3x3, result), each
-// with a pipelined binary32 multiplier and adder/subtractor; datapaths 0-3
-// also carry a divider (the four entries of the 2x2 inverse). Step 4 is the
-// determinant a d - b c on datapath 0, then the four divisions
-// d/det, -b/det, -c/det, a/det (negation flips the sign bit).
+// with a pipelined binary32 multiplier and adder/subtractor, and one
+// pipelined divider beside them (the papers give four datapaths a divider
+// each; one divider, fed one division a cycle, costs three cycles and saves
+// three dividers). Step 4 is the determinant a d - b c on datapath 0, then
+// the four divisions d/det, -b/det, -c/det, a/det (negation flips the sign
+// bit), entering the divider in that order.
 //
 // Every element is computed in the order of the software reference
 // (locus_hw::run): a dot product of length k is
@@ -26,7 +28,7 @@
 // state visits of (latency + 1) cycles, the +1 being the cycle whose end
 // writes the bank:
 //   dot product, k = 2 or 3: mult1 Lm + 1, mult2 2, multadd (k - 1) La + 1
-//   element-wise add or subtract: add La + 1;  division: div1 Ld + 1
+//   element-wise add or subtract: add La + 1;  four divisions: div1 Ld + 4
 //   determinant: mult1 Lm + 1, mult2 2, add La + 1
 // In mult1 the k products enter the multiplier one per cycle; each product
 // is caught as it leaves (the last ones during mult2); multadd feeds the
@@ -86,7 +88,7 @@ module ekf_core (
         case (kind)
             K_DOT3:        length_of = SUM0 + 2 * LA + 1;
             K_DOT2, K_DET: length_of = SUM0 + LA + 1;
-            K_DIV:         length_of = LD + 1;
+            K_DIV:         length_of = LD + 4;
             default:       length_of = LA + 1;
         endcase
     endfunction
@@ -200,6 +202,34 @@ module ekf_core (
 // Operand i0 + s k of a dot product (k = 0, 1, 2).
 `define SEL(i0, s) ((k == 2'd0) ? `B(i0) : (k == 2'd1) ? `B((i0) + (s)) : `B((i0) + 2 * (s)))
 
+    // ---- the divider -----------------------------------------------------
+    // Step 4's entries of adj(O3) = [d, -b; -c, a] enter the divider over
+    // det one a cycle, entry j at w = j; its quotient leaves at w = j + LD.
+    // Entries 0-2 are caught as they leave; entry 3 leaves in the wave's
+    // last cycle, whose end writes the bank.
+    reg  [31:0] div_a;
+    wire [31:0] div_y;
+    reg  [31:0] q0, q1, q2;
+    always @* begin
+        case (w)
+            6'd0:    div_a = `B(O3 + 3);
+            6'd1:    div_a = `B(O3 + 1) ^ 32'h8000_0000;
+            6'd2:    div_a = `B(O3 + 2) ^ 32'h8000_0000;
+            default: div_a = `B(O3 + 0);
+        endcase
+    end
+    fp_div div (.clk(clk), .a_in(div_a), .b_in(`B(DET)), .y(div_y));
+    always @(posedge clk) begin
+        if (w == LD) q0 <= div_y;
+        if (w == LD + 1) q1 <= div_y;
+        if (w == LD + 2) q2 <= div_y;
+    end
+    wire [31:0] quotient [0:3];
+    assign quotient[0] = q0;
+    assign quotient[1] = q1;
+    assign quotient[2] = q2;
+    assign quotient[3] = div_y;
+
     // ---- datapaths -------------------------------------------------------
     genvar e;
     generate
@@ -209,7 +239,7 @@ module ekf_core (
             localparam integer I2 = e / 2, J2 = e % 2, I3 = e / 3, J3 = e % 3;
             reg  [31:0] oa, ob;      // operands from the bank
             reg  [31:0] p0, p1, p2;  // products caught from the multiplier
-            wire [31:0] mul_y, add_y, div_y;
+            wire [31:0] mul_y, add_y;
             wire [31:0] add_a = (kind == K_ADD || kind == K_SUB) ? oa :
                                 (w == SUM0) ? p0 : add_y;
             wire [31:0] add_b = (kind == K_ADD || kind == K_SUB) ? ob :
@@ -225,16 +255,6 @@ module ekf_core (
                         oa = (k == 2'd0) ? `B(O3 + 0) : `B(O3 + 1);
                         ob = (k == 2'd0) ? `B(O3 + 3) : `B(O3 + 2);
                     end
-                    T_O4: begin
-                        // adj(O3) = [d, -b; -c, a], each over det.
-                        case (e % 4)
-                            0: oa = `B(O3 + 3);
-                            1: oa = `B(O3 + 1) ^ 32'h8000_0000;
-                            2: oa = `B(O3 + 2) ^ 32'h8000_0000;
-                            default: oa = `B(O3 + 0);
-                        endcase
-                        ob = `B(DET);
-                    end
                     T_G:  begin oa = `SEL(O1 + 2 * I2, 1); ob = `SEL(O4 + J2, 2);     end
                     T_O5: begin oa = `B(Z + e % 2);        ob = `B(HX + e % 2);       end
                     T_O6: begin oa = `SEL(G + 2 * (e % 3), 1); ob = `SEL(O5, 1);      end
@@ -247,11 +267,6 @@ module ekf_core (
 
             fp_mul mul (.clk(clk), .a_in(oa), .b_in(ob), .y(mul_y));
             fp_add add (.clk(clk), .a_in(add_a), .b_in(add_b), .sub_in(add_sub), .y(add_y));
-            if (e < 4) begin : with_div
-                fp_div div (.clk(clk), .a_in(oa), .b_in(ob), .y(div_y));
-            end else begin : no_div
-                assign div_y = 32'd0;
-            end
 
             // Products leave the multiplier LM cycles after entering it.
             always @(posedge clk) begin
@@ -260,7 +275,8 @@ module ekf_core (
                 if (w == LM + 2) p2 <= mul_y;
             end
 
-            assign result[e] = (kind == K_DIV) ? div_y : add_y;
+            // Step 4 writes O4's four entries only.
+            assign result[e] = (kind == K_DIV) ? quotient[e % 4] : add_y;
         end
     endgenerate
 

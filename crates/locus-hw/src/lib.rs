@@ -23,7 +23,9 @@
 //!   addition of latency `L_add` after another (the later products are
 //!   ready by then).
 //! * `add`: an element-wise sum or difference, `L_add`.
-//! * `div1`: an element-wise division, `L_div`, on the dividers only.
+//! * `div1`: element-wise divisions on the dividers only, which are
+//!   pipelined: `L_div` for as many divisions as dividers, one cycle more
+//!   for each further division a divider takes.
 //! * `waiting`: idle until `start`; one cycle to leave it.
 //!
 //! So a dot product of length `k` takes `L_mul` (k = 1) or
@@ -345,15 +347,10 @@ impl Machine {
         &mut self,
         step: &'static str,
         elements: usize,
-        divide: bool,
         states: &[(State, u64)],
         ops: OpCounts,
     ) {
-        let lanes = if divide {
-            self.cfg.datapaths.min(self.cfg.dividers)
-        } else {
-            self.cfg.datapaths
-        };
+        let lanes = self.cfg.datapaths;
         let mut left = elements;
         while left > 0 {
             let busy = left.min(lanes);
@@ -403,7 +400,6 @@ impl Machine {
         self.charge(
             step,
             R * C,
-            false,
             states,
             OpCounts {
                 mul: K,
@@ -427,7 +423,6 @@ impl Machine {
         self.charge(
             step,
             R * C,
-            false,
             &[(State::Add, l.add)],
             OpCounts {
                 mul: 0,
@@ -438,7 +433,10 @@ impl Machine {
         out
     }
 
-    /// `a / s` element-wise in f32 on the dividers.
+    /// `a / s` element-wise in f32 on the dividers. A divider is
+    /// pipelined: it takes one division a cycle, so the step's `e`
+    /// divisions on `d` dividers take one visit of `div1` of
+    /// `L_div + ceil(e / d) - 1` cycles.
     fn divide<const R: usize, const C: usize>(
         &mut self,
         step: &'static str,
@@ -446,18 +444,13 @@ impl Machine {
         s: f32,
     ) -> SMatrix<f32, R, C> {
         let out = a.map(|v| v / s);
-        let l = self.cfg.latencies;
-        self.charge(
-            step,
-            R * C,
-            true,
-            &[(State::Div1, l.div)],
-            OpCounts {
-                mul: 0,
-                add: 0,
-                div: 1,
-            },
-        );
+        let elements = R * C;
+        let dividers = self.cfg.datapaths.min(self.cfg.dividers);
+        let busy = elements.min(dividers);
+        let issues = elements.div_ceil(dividers) as u64;
+        self.visit(step, State::Div1, self.cfg.latencies.div + issues - 1, busy);
+        self.peak.div = self.peak.div.max(busy);
+        self.done.div += elements;
         out
     }
 
@@ -470,7 +463,6 @@ impl Machine {
         self.charge(
             step,
             1,
-            false,
             &[
                 (State::Mult1, l.mul),
                 (State::Mult2, 1),

@@ -10,14 +10,11 @@ use std::time::Instant;
 
 use locus_hw::hdl;
 use locus_hw::hdl::ekf_core::{self, CoreSim};
-use locus_hw::{self as hw, HwConfig, Schedule};
+use locus_hw::{self as hw, Schedule};
 
 #[test]
 fn the_core_is_bit_exact_and_takes_the_models_cycles() {
-    let cfg = HwConfig {
-        latencies: hdl::built_latencies().unwrap(),
-        ..HwConfig::default()
-    };
+    let cfg = hdl::built_config().unwrap();
     let inputs = ekf_core::random_inputs(50, 5);
     let t = Instant::now();
     let report = CoreSim::Icarus
@@ -46,10 +43,7 @@ fn the_core_is_bit_exact_and_takes_the_models_cycles() {
 /// run means the results were compared).
 #[test]
 fn a_wrong_expected_result_is_reported() {
-    let cfg = HwConfig {
-        latencies: hdl::built_latencies().unwrap(),
-        ..HwConfig::default()
-    };
+    let cfg = hdl::built_config().unwrap();
     let inputs = ekf_core::random_inputs(3, 8);
     let dir = hdl::TempDir::new("core-corrupt").unwrap();
     let path = dir.path().join("core.txt");

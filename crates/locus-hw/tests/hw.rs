@@ -167,6 +167,18 @@ fn cycle_count_matches_a_hand_count() {
     let per_state: u64 = run.cycles_per_state().iter().map(|(_, c)| c).sum();
     assert_eq!(per_state, run.cycles);
     assert_eq!(run.cycles_per_state()[0], (State::Waiting, 2));
+    // One pipelined divider: the four divisions enter it one a cycle, so
+    // div1 takes L_div + 3 (+1), three cycles more; 2 dividers, one more.
+    for (dividers, cycles) in [(1, 177), (2, 175), (3, 175), (4, 174)] {
+        let cfg = HwConfig {
+            dividers,
+            ..HwConfig::default()
+        };
+        let r = hw::run(&cfg, Schedule::Inverse2x2, &inputs(&b, &m, &z)).unwrap();
+        assert_eq!(r.cycles, cycles, "{dividers} dividers");
+        assert_eq!((r.x_post, r.p_post, r.gain), (run.x_post, run.p_post, run.gain));
+        assert_eq!(r.operators.div, dividers);
+    }
     // Slower operators cost more cycles; one datapath costs most.
     let slow = HwConfig {
         latencies: Latencies::ALTFP_SLOWEST,

@@ -155,6 +155,7 @@ pub fn run(args: &Args) -> Result<()> {
     if let Some(dir) = &args.export_vectors {
         let built = HwConfig {
             latencies: locus_hw::hdl::built_latencies()?,
+            dividers: locus_hw::hdl::BUILT_DIVIDERS,
             ..cfg
         };
         let e = crate::hw_rtl::export(dir, args.unit_vectors, args.core_vectors, &built)?;
@@ -294,10 +295,7 @@ pub fn run(args: &Args) -> Result<()> {
     if !args.no_sim {
         crate::hw_rtl::print_simulated(&inputs, args.clock_mhz)?;
     }
-    let built = HwConfig {
-        latencies: locus_hw::hdl::built_latencies()?,
-        ..HwConfig::default()
-    };
+    let built = locus_hw::hdl::built_config()?;
     let cycles = hw::run(&built, Schedule::Inverse2x2, &inputs)?.cycles;
     crate::hw_pnr::print(args.pnr.as_deref(), cycles)
 }

@@ -152,17 +152,16 @@ fn write_all(dir: &Path, units: usize, corrections: usize, cfg: &HwConfig) -> Re
 /// The latency header cannot be read; a model error.
 #[allow(clippy::cast_precision_loss)]
 pub fn print_simulated(inputs: &CoreInputs, clock_mhz: f64) -> Result<()> {
-    let latencies = locus_hw::hdl::built_latencies()?;
     let cfg = HwConfig {
-        latencies,
         clock_hz: clock_mhz * 1e6,
-        ..HwConfig::default()
+        ..locus_hw::hdl::built_config()?
     };
+    let latencies = cfg.latencies;
     let model = hw::run(&cfg, Schedule::Inverse2x2, inputs)?;
     let us = |cycles: u64| format!("{:.2}", cycles as f64 / clock_mhz);
     println!(
-        "Verilog core (hdl/core/ekf_core.v), units built with latencies mult {} / add {} / div {} cycles, +1 per state, {clock_mhz} MHz:",
-        latencies.mul, latencies.add, latencies.div
+        "Verilog core (hdl/core/ekf_core.v), units built with latencies mult {} / add {} / div {} cycles, {} pipelined divider(s), +1 per state, {clock_mhz} MHz:",
+        latencies.mul, latencies.add, latencies.div, cfg.dividers
     );
     let mut table = with_header([
         "",

@@ -8,7 +8,7 @@
 use std::process::Command;
 
 use locus_hw::hdl::ekf_core::{CoreSim, CoreSimReport};
-use locus_hw::{self as hw, HwConfig, Schedule};
+use locus_hw::{self as hw, Schedule};
 
 fn locus(args: &[&str]) -> String {
     let out = Command::new(env!("CARGO_BIN_EXE_locus"))
@@ -25,10 +25,7 @@ fn locus(args: &[&str]) -> String {
 
 /// The model's cycles per correction with the units' latencies.
 fn model_cycles() -> u64 {
-    let cfg = HwConfig {
-        latencies: locus_hw::hdl::built_latencies().unwrap(),
-        ..HwConfig::default()
-    };
+    let cfg = locus_hw::hdl::built_config().unwrap();
     let inp = locus_hw::hdl::ekf_core::random_inputs(1, 1)[0];
     hw::run(&cfg, Schedule::Inverse2x2, &inp).unwrap().cycles
 }

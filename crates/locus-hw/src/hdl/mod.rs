@@ -23,7 +23,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::Latencies;
+use crate::{HwConfig, Latencies};
 
 pub mod ekf_core;
 pub mod fp32;
@@ -65,6 +65,24 @@ impl HdlError {
             source,
         }
     }
+}
+
+/// Dividers of the Verilog core: one, pipelined, shared by step 4's four
+/// divisions (`hdl/core/ekf_core.v`; the papers' core has four).
+pub const BUILT_DIVIDERS: usize = 1;
+
+/// The cycle-level model's configuration of the Verilog core: its units'
+/// latencies ([`built_latencies`]) and its [`BUILT_DIVIDERS`] dividers, on
+/// the papers' nine datapaths at their 50 MHz.
+///
+/// # Errors
+/// Those of [`built_latencies`].
+pub fn built_config() -> Result<HwConfig, HdlError> {
+    Ok(HwConfig {
+        latencies: built_latencies()?,
+        dividers: BUILT_DIVIDERS,
+        ..HwConfig::default()
+    })
 }
 
 /// The cycle-level model of the Verilog core: the latencies the units are
