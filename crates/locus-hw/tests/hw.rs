@@ -176,7 +176,10 @@ fn cycle_count_matches_a_hand_count() {
         };
         let r = hw::run(&cfg, Schedule::Inverse2x2, &inputs(&b, &m, &z)).unwrap();
         assert_eq!(r.cycles, cycles, "{dividers} dividers");
-        assert_eq!((r.x_post, r.p_post, r.gain), (run.x_post, run.p_post, run.gain));
+        assert_eq!(
+            (r.x_post, r.p_post, r.gain),
+            (run.x_post, run.p_post, run.gain)
+        );
         assert_eq!(r.operators.div, dividers);
     }
     // Slower operators cost more cycles; one datapath costs most.
