@@ -30,6 +30,19 @@ function [4:0] fp_lzc24;
     end
 endfunction
 
+// Trailing zeros of a 24-bit vector (24 for zero): the leading zeros of
+// its bits reversed.
+function [4:0] fp_tzc24;
+    input [23:0] x;
+    reg [23:0] r;
+    integer i;
+    begin
+        for (i = 0; i < 24; i = i + 1)
+            r[i] = x[23 - i];
+        fp_tzc24 = fp_lzc24(r);
+    end
+endfunction
+
 // Leading zeros of a 28-bit vector (28 for zero), likewise.
 function [4:0] fp_lzc28;
     input [27:0] x;

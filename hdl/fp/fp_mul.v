@@ -6,8 +6,19 @@
 // 0x7FC00000. Pipelined with latency `FP_MUL_LAT (3, see fp_latency.vh for
 // the edge at which y appears), one operation per clock:
 //   stage 0: the operands registered;
-//   stage 1: classify, unpack (subnormals normalised), 24x24 product;
-//   stage 2: normalise by at most one bit, round, pack.
+//   stage 1: classify; the 24x24 product of the significands as encoded
+//            (a subnormal's hidden bit 0), and beside it where its 27
+//            result bits lie;
+//   stage 2: take those bits by one shift, round, pack.
+//
+// The significands enter the multiplier as encoded, so no normalisation
+// stands between the operand registers and the DSP blocks. Beside the
+// product, stage 1 finds from the operands alone everything the shift
+// needs: the product p of significands ma, mb has its leading one at bit
+// 47 - lz or 46 - lz (lz the significands' leading zeros, nonzero only for
+// a subnormal), its bit 46 weighs 2^(e - 127) with e = ea + eb - 127, and
+// its trailing zeros are those of ma and mb together, which give the
+// sticky bit without looking at the bits shifted out.
 `include "fp_latency.vh"
 
 module fp_mul (
@@ -40,20 +51,56 @@ module fp_mul (
     wire a_zero = (a[30:0] == 31'd0);
     wire b_zero = (b[30:0] == 31'd0);
 
+    // Exponents (a subnormal's is 1) and significands as encoded.
+    wire [7:0]  ea = (a[30:23] == 8'd0) ? 8'd1 : a[30:23];
+    wire [7:0]  eb = (b[30:23] == 8'd0) ? 8'd1 : b[30:23];
+    wire [23:0] ma = {a[30:23] != 8'd0, a[22:0]};
+    wire [23:0] mb = {b[30:23] != 8'd0, b[22:0]};
+
     // ---- stage 1 ----
+    // The result's 27 bits m (m[26] its leading one, or 0 for a subnormal;
+    // m[2] the guard bit; m[0] the sticky bit) are bits T..T-26 of p: by
+    // default T = 47 - sl, where sl = min(lz, e) (p shifted left by sl,
+    // right by -sl when e <= 0: never below exponent 1). When lz < e and the
+    // product's leading one turns out to sit at 46 - lz, one bit lower
+    // (T = 46 - sl).
     reg               r1_special;  // a NaN, an infinity or a zero operand
     reg        [31:0] r1_spec_y;   // the result then
     reg               r1_s;
-    reg signed [11:0] r1_e;        // biased exponent of product bit 46
-    reg        [47:0] r1_p;        // product of the significands, in [2^46, 2^48)
+    reg        [47:0] r1_p;        // product of the significands
+    reg        [6:0]  r1_r;        // p's shift: right by r1_r from {p, 24'b0}
+    reg               r1_low;      // lz < e: one bit lower if p[47 - lz] = 0
+    reg        [7:0]  r1_ea;       // exponent field when T = 47 - sl
+    reg        [7:0]  r1_eb;       // ... when T = 46 - sl
+    reg               r1_ova;      // the exponent overflows when T = 47 - sl
+    reg               r1_ovb;      // ... when T = 46 - sl
+    reg               r1_sta;      // sticky bit when T = 47 - sl
+    reg               r1_stb;      // ... when T = 46 - sl
 
-    reg        [35:0] s1_ua, s1_ub;
+    reg signed [9:0]  s1_e;   // biased exponent of p's bit 46
+    reg signed [9:0]  s1_lz;  // leading zeros of ma and mb together
+    reg signed [9:0]  s1_tz;  // trailing zeros of p
+    reg signed [9:0]  s1_sl;
+    reg signed [9:0]  s1_r;
+    reg signed [9:0]  s1_ea;
     always @(posedge clk) begin
-        s1_ua = fp_unpack(a);
-        s1_ub = fp_unpack(b);
-        r1_s <= a[31] ^ b[31];
-        r1_e <= s1_ua[35:24] + s1_ub[35:24] - 12'd127;
-        r1_p <= s1_ua[23:0] * s1_ub[23:0];
+        s1_e  = $signed({2'b0, ea}) + $signed({2'b0, eb}) - 10'sd127;
+        s1_lz = $signed({5'd0, fp_lzc24(ma)}) + $signed({5'd0, fp_lzc24(mb)});
+        s1_tz = $signed({5'd0, fp_tzc24(ma)}) + $signed({5'd0, fp_tzc24(mb)});
+        s1_sl = (s1_e <= s1_lz) ? s1_e : s1_lz;
+        s1_r  = 10'sd24 - s1_sl;
+        s1_ea = (s1_e <= s1_lz) ? 10'sd1 : s1_e + 10'sd1 - s1_lz;
+
+        r1_s   <= a[31] ^ b[31];
+        r1_p   <= ma * mb;
+        r1_r   <= (s1_r > 10'sd127) ? 7'd127 : s1_r[6:0];
+        r1_low <= s1_e > s1_lz;
+        r1_ea  <= s1_ea[7:0];
+        r1_eb  <= s1_ea[7:0] - 8'd1;
+        r1_ova <= s1_ea >= 10'sd255;
+        r1_ovb <= s1_ea >= 10'sd256;
+        r1_sta <= s1_tz + s1_sl <= 10'sd21;
+        r1_stb <= s1_tz + s1_sl <= 10'sd20;
 
         r1_special <= 1'b1;
         if (a_nan || b_nan || (a_inf && b_zero) || (a_zero && b_inf))
@@ -71,17 +118,29 @@ module fp_mul (
     // ---- stage 2 ----
     reg        [31:0] r2_y;
 
+    reg        [71:0] s2_q;   // bits 47..21: p's bits 47 - sl .. 21 - sl
+    reg               s2_b;   // the leading one is one bit lower
     reg        [26:0] s2_m;
-    reg signed [11:0] s2_e;
+    reg        [7:0]  s2_ef;
+    reg               s2_inc;
+    reg        [30:0] s2_mag;
     always @(posedge clk) begin
-        if (r1_p[47]) begin
-            s2_m = {r1_p[47:22], |r1_p[21:0]};
-            s2_e = r1_e + 12'sd1;
-        end else begin
-            s2_m = {r1_p[46:21], |r1_p[20:0]};
-            s2_e = r1_e;
-        end
-        r2_y <= r1_special ? r1_spec_y : fp_round_pack(r1_s, s2_e, s2_m);
+        s2_q = {r1_p, 24'd0} >> r1_r;
+        s2_b = !s2_q[47] && r1_low;
+        s2_m = s2_b ? {s2_q[46:21], r1_stb} : {s2_q[47:22], r1_sta};
+        // The exponent field: 0 for a subnormal (no leading one at bit 47
+        // and none one lower to take).
+        s2_ef = s2_q[47] ? r1_ea : (r1_low ? r1_eb : 8'd0);
+        s2_inc = s2_m[2] & (s2_m[3] | s2_m[1] | s2_m[0]);
+        // A carry out of the fraction moves a subnormal to the smallest
+        // normal, and the largest finite to infinity.
+        s2_mag = {s2_ef, s2_m[25:3]} + {30'd0, s2_inc};
+        if (r1_special)
+            r2_y <= r1_spec_y;
+        else if (s2_b ? r1_ovb : r1_ova)
+            r2_y <= {r1_s, 8'hFF, 23'd0};
+        else
+            r2_y <= {r1_s, s2_mag};
     end
 
     assign y = r2_y;
