@@ -9,7 +9,9 @@
 // each; one divider, fed one division a cycle, costs three cycles and saves
 // three dividers). Step 4 is the determinant a d - b c on datapath 0, then
 // the four divisions d/det, -b/det, -c/det, a/det (negation flips the sign
-// bit), entering the divider in that order.
+// bit), entering the divider in that order. Step 6, O5 = z - h(X-), needs
+// only inputs: it runs beside step 1 on the adders of datapaths 6 and 7,
+// which step 1 (six elements) leaves idle, and has no wave of its own.
 //
 // Every element is computed in the order of the software reference
 // (locus_hw::run): a dot product of length k is
@@ -27,14 +29,16 @@
 // start: waiting 2 cycles, then one wave per step, each a sequence of
 // state visits of (latency + 1) cycles, the +1 being the cycle whose end
 // writes the bank:
-//   dot product, k = 2 or 3: mult1 Lm + 1, mult2 2, multadd (k - 1) La + 1
+//   dot product, k = 2 or 3: mult1 Lm + 1, multadd (k - 1) La + 1
 //   element-wise add or subtract: add La + 1;  four divisions: div1 Ld + 4
-//   determinant: mult1 Lm + 1, mult2 2, add La + 1
-// In mult1 the k products enter the multiplier one per cycle; each product
-// is caught as it leaves (the last ones during mult2); multadd feeds the
-// adder (p0 + p1), then (sum + p2) as soon as the sum leaves it. The cycle
-// count is the cycle-level model's (`locus hw`) with these latencies and a
-// transition of one cycle.
+//   determinant: mult1 Lm + 1, add La + 1
+// In mult1 the k products enter the multiplier one per cycle and the first
+// is caught as it leaves; multadd feeds the adder (p0 + p1) with p1 taken
+// straight from the multiplier as it leaves (so the papers' mult2 takes no
+// cycle of its own), then (sum + p2) as soon as the sum leaves the adder.
+// The cycle count is the cycle-level model's (`locus hw`) with these
+// latencies, a transition of one cycle, products forwarded and O5 beside
+// step 1 (locus_hw::hdl::built_config).
 
 `include "fp_latency.vh"
 
@@ -62,8 +66,9 @@ module ekf_core (
                      S_MULTADD = 3'd3, S_ADD = 3'd4, S_DIV1 = 3'd5;
 
     localparam integer LM = `FP_MUL_LAT, LA = `FP_ADD_LAT, LD = `FP_DIV_LAT;
-    // First cycle of multadd (or of the determinant's add) in a wave.
-    localparam integer SUM0 = LM + 3;
+    // First cycle of multadd (or of the determinant's add) in a wave: the
+    // second product leaves the multiplier.
+    localparam integer SUM0 = LM + 1;
 
     // The steps (one wave each) and the kind of each.
     localparam [3:0] T_O1 = 4'd0, T_O2 = 4'd1, T_O3 = 4'd2, T_DET = 4'd3,
@@ -159,20 +164,21 @@ module ekf_core (
                 busy <= 1'b0;
                 done <= 1'b1;
             end else begin
-                step <= step + 4'd1;
+                // O5 was computed beside step 1.
+                step <= (step == T_G) ? T_O6 : step + 4'd1;
             end
         end else begin
             w <= w + 6'd1;
         end
     end
 
-    // The papers' state of the current cycle.
+    // The papers' state of the current cycle (mult2 has no cycle of its
+    // own: the second product enters the adder as it leaves).
     always @* begin
         if (!busy || waiting) state = S_WAITING;
         else case (kind)
             K_DOT3, K_DOT2, K_DET:
                 state = (w <= LM) ? S_MULT1 :
-                        (w < SUM0) ? S_MULT2 :
                         (kind == K_DET) ? S_ADD : S_MULTADD;
             K_DIV:   state = S_DIV1;
             default: state = S_ADD;
@@ -182,6 +188,8 @@ module ekf_core (
     // ---- register bank ---------------------------------------------------
     wire [32*NREG-1:0] bank;
     wire [31:0] result [0:8];
+    // O5 leaves the adders of datapaths 6 and 7 at w = LA of step 1.
+    wire o5_ready = busy && !waiting && step == T_O1 && w == LA;
     assign rd_data = (rd_addr < NREG) ? bank[32*rd_addr +: 32] : 32'd0;
 
     genvar r;
@@ -192,7 +200,10 @@ module ekf_core (
             always @(posedge clk) begin
                 if (!busy && wr_en && wr_addr == r)
                     q <= wr_data;
-                else if (owner_step(r) >= 0 && busy && last && step == owner_step(r))
+                else if (owner_step(r) == T_O5) begin
+                    if (o5_ready)
+                        q <= result[6 + r - O5];
+                end else if (owner_step(r) >= 0 && busy && last && step == owner_step(r))
                     q <= result[r - owner_base(r)];
             end
         end
@@ -238,17 +249,22 @@ module ekf_core (
             // result (3 columns).
             localparam integer I2 = e / 2, J2 = e % 2, I3 = e / 3, J3 = e % 3;
             reg  [31:0] oa, ob;      // operands from the bank
-            reg  [31:0] p0, p1, p2;  // products caught from the multiplier
+            reg  [31:0] p0, p2;      // products caught from the multiplier
             wire [31:0] mul_y, add_y;
-            wire [31:0] add_a = (kind == K_ADD || kind == K_SUB) ? oa :
-                                (w == SUM0) ? p0 : add_y;
-            wire [31:0] add_b = (kind == K_ADD || kind == K_SUB) ? ob :
-                                (w == SUM0) ? p1 : p2;
-            wire        add_sub = (kind == K_SUB || kind == K_DET);
+            // Datapaths 6 and 7 subtract O5 = z - h(X-) during step 1.
+            wire        o5 = (e == 6 || e == 7) && step == T_O1;
+            wire        elementwise = kind == K_ADD || kind == K_SUB || o5;
+            wire [31:0] add_a = elementwise ? oa : (w == SUM0) ? p0 : add_y;
+            wire [31:0] add_b = elementwise ? ob : (w == SUM0) ? mul_y : p2;
+            wire        add_sub = (kind == K_SUB || kind == K_DET || o5);
 
             always @* begin
                 case (step)
-                    T_O1: begin oa = `SEL(P + 3 * I2, 1);  ob = `SEL(H + 3 * J2, 1);  end
+                    T_O1: if (e == 6 || e == 7) begin
+                              oa = `B(Z + e - 6);          ob = `B(HX + e - 6);
+                          end else begin
+                              oa = `SEL(P + 3 * I2, 1);    ob = `SEL(H + 3 * J2, 1);
+                          end
                     T_O2: begin oa = `SEL(H + 3 * I2, 1);  ob = `SEL(O1 + J2, 2);     end
                     T_O3: begin oa = `B(O2 + e % 4);       ob = `B(R + e % 4);        end
                     T_DET: begin
@@ -256,7 +272,6 @@ module ekf_core (
                         ob = (k == 2'd0) ? `B(O3 + 3) : `B(O3 + 2);
                     end
                     T_G:  begin oa = `SEL(O1 + 2 * I2, 1); ob = `SEL(O4 + J2, 2);     end
-                    T_O5: begin oa = `B(Z + e % 2);        ob = `B(HX + e % 2);       end
                     T_O6: begin oa = `SEL(G + 2 * (e % 3), 1); ob = `SEL(O5, 1);      end
                     T_XP: begin oa = `B(X + e % 3);        ob = `B(O6 + e % 3);       end
                     T_O7: begin oa = `SEL(G + 2 * I3, 1);  ob = `SEL(H + J3, 3);      end
@@ -268,10 +283,10 @@ module ekf_core (
             fp_mul mul (.clk(clk), .a_in(oa), .b_in(ob), .y(mul_y));
             fp_add add (.clk(clk), .a_in(add_a), .b_in(add_b), .sub_in(add_sub), .y(add_y));
 
-            // Products leave the multiplier LM cycles after entering it.
+            // Products leave the multiplier LM cycles after entering it; p1
+            // goes straight into the adder.
             always @(posedge clk) begin
                 if (w == LM) p0 <= mul_y;
-                if (w == LM + 1) p1 <= mul_y;
                 if (w == LM + 2) p2 <= mul_y;
             end
 

@@ -4,14 +4,17 @@
 // underflow); the sign of a quotient is the XOR of the operands' signs;
 // x / 0 = inf for finite nonzero x, x / inf = 0 for finite x; any NaN
 // operand, 0 / 0 and inf / inf give the canonical quiet NaN 0x7FC00000.
-// Pipelined with latency `FP_DIV_LAT (9, see fp_latency.vh for the edge at
+// Pipelined with latency `FP_DIV_LAT (13, see fp_latency.vh for the edge at
 // which y appears), one operation per clock:
-//   stage 0:    the operands registered;
-//   stage 1:    classify, unpack (subnormals normalised), pre-shift the
-//               dividend's significand so that the quotient is in [1, 2);
-//   stages 2-7: restoring division, QB quotient bits per stage
-//               (6 x 5 = 30 bits: 1 integer, 23 fraction, 6 for rounding);
-//   stage 8:    sticky bit from the final remainder, round, pack.
+//   stage 0:     the operands registered;
+//   stage 1:     classify, unpack (subnormals normalised), pre-shift the
+//                dividend's significand so that the quotient is in [1, 2);
+//   stages 2-11: restoring division, QB quotient bits per stage
+//                (10 x 3 = 30 bits: 1 integer, 23 fraction, 6 for rounding);
+//   stage 12:    sticky bit from the final remainder, round, pack.
+// Three bits a stage keep a stage's chain of compare-and-subtract steps as
+// short as the other units' stages; the core divides once a correction, so
+// each stage costs one cycle a correction.
 `include "fp_latency.vh"
 
 module fp_div (
@@ -30,8 +33,8 @@ module fp_div (
         b <= b_in;
     end
 
-    localparam QB = 5;       // quotient bits per division stage (unrolled below)
-    localparam NS = 6;       // division stages
+    localparam QB = 3;       // quotient bits per division stage
+    localparam NS = 10;      // division stages
     localparam QW = QB * NS; // quotient bits in all
 
 
@@ -87,23 +90,21 @@ module fp_div (
         end
     end
 
-    // ---- stages 2-7: QB steps of restoring division each ----
+    // ---- stages 2-11: QB steps of restoring division each ----
     // One statement per step (a simulator runs the unrolled chain quickly).
     genvar k;
     generate
         for (k = 1; k <= NS; k = k + 1) begin : g_div
-            reg [25:0] r0, r1, r2, r3, r4, r5;
+            reg [25:0] r0, r1, r2, r3;
             reg [25:0] dv;
-            reg [4:0]  q;
+            reg [QB-1:0] q;
             always @(posedge clk) begin
                 dv = {2'b00, p_d[k-1]};
                 r0 = p_r[k-1];
-                {q[4], r1} = (r0 >= dv) ? {1'b1, (r0 - dv) << 1} : {1'b0, r0 << 1};
-                {q[3], r2} = (r1 >= dv) ? {1'b1, (r1 - dv) << 1} : {1'b0, r1 << 1};
-                {q[2], r3} = (r2 >= dv) ? {1'b1, (r2 - dv) << 1} : {1'b0, r2 << 1};
-                {q[1], r4} = (r3 >= dv) ? {1'b1, (r3 - dv) << 1} : {1'b0, r3 << 1};
-                {q[0], r5} = (r4 >= dv) ? {1'b1, (r4 - dv) << 1} : {1'b0, r4 << 1};
-                p_r[k]      <= r5;
+                {q[2], r1} = (r0 >= dv) ? {1'b1, (r0 - dv) << 1} : {1'b0, r0 << 1};
+                {q[1], r2} = (r1 >= dv) ? {1'b1, (r1 - dv) << 1} : {1'b0, r1 << 1};
+                {q[0], r3} = (r2 >= dv) ? {1'b1, (r2 - dv) << 1} : {1'b0, r2 << 1};
+                p_r[k]      <= r3;
                 p_q[k]      <= {p_q[k-1][QW-QB-1:0], q};
                 p_d[k]      <= dv[23:0];
                 p_special[k]         <= p_special[k-1];
@@ -114,17 +115,17 @@ module fp_div (
         end
     endgenerate
 
-    // ---- stage 8: sticky from the remainder, round, pack ----
+    // ---- stage 12: sticky from the remainder, round, pack ----
     wire [QW-1:0] q_all = p_q[NS];  // q_all[QW-1] = 1
     wire [25:0]   r_all = p_r[NS];
-    reg  [31:0]   r8_y;
+    reg  [31:0]   r_y;
     always @(posedge clk) begin
         if (p_special[NS])
-            r8_y <= p_spec_y[NS];
+            r_y <= p_spec_y[NS];
         else
-            r8_y <= fp_round_pack(p_s[NS], p_e[NS],
+            r_y <= fp_round_pack(p_s[NS], p_e[NS],
                                   {q_all[QW-1:QW-26], (|q_all[QW-27:0]) | (r_all != 26'd0)});
     end
 
-    assign y = r8_y;
+    assign y = r_y;
 endmodule

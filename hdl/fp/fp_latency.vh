@@ -15,5 +15,5 @@
 `define FP_LATENCY_VH
 `define FP_MUL_LAT 3
 `define FP_ADD_LAT 4
-`define FP_DIV_LAT 9
+`define FP_DIV_LAT 13
 `endif

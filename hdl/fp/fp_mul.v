@@ -77,30 +77,36 @@ module fp_mul (
     reg               r1_sta;      // sticky bit when T = 47 - sl
     reg               r1_stb;      // ... when T = 46 - sl
 
-    reg signed [9:0]  s1_e;   // biased exponent of p's bit 46
-    reg signed [9:0]  s1_lz;  // leading zeros of ma and mb together
-    reg signed [9:0]  s1_tz;  // trailing zeros of p
-    reg signed [9:0]  s1_sl;
-    reg signed [9:0]  s1_r;
-    reg signed [9:0]  s1_ea;
+    // Everything below is derived from the sums of the operands' exponents,
+    // leading zeros and trailing zeros with each comparison taken against a
+    // constant folded into the other side, so that no carry chain waits for
+    // more than one other: e = sum - 127, and "e <= lz" is sum <= lz + 127.
+    wire [8:0] s1_sum = {1'b0, ea} + {1'b0, eb};
+    wire [5:0] s1_lz  = {1'b0, fp_lzc24(ma)} + {1'b0, fp_lzc24(mb)};
+    wire [5:0] s1_tz  = {1'b0, fp_tzc24(ma)} + {1'b0, fp_tzc24(mb)};
+    // sl = e (e <= lz: down to exponent 1 at most) or lz.
+    wire       s1_le  = {1'b0, s1_sum} <= {4'd0, s1_lz} + 10'd127;
     always @(posedge clk) begin
-        s1_e  = $signed({2'b0, ea}) + $signed({2'b0, eb}) - 10'sd127;
-        s1_lz = $signed({5'd0, fp_lzc24(ma)}) + $signed({5'd0, fp_lzc24(mb)});
-        s1_tz = $signed({5'd0, fp_tzc24(ma)}) + $signed({5'd0, fp_tzc24(mb)});
-        s1_sl = (s1_e <= s1_lz) ? s1_e : s1_lz;
-        s1_r  = 10'sd24 - s1_sl;
-        s1_ea = (s1_e <= s1_lz) ? 10'sd1 : s1_e + 10'sd1 - s1_lz;
-
         r1_s   <= a[31] ^ b[31];
         r1_p   <= ma * mb;
-        r1_r   <= (s1_r > 10'sd127) ? 7'd127 : s1_r[6:0];
-        r1_low <= s1_e > s1_lz;
-        r1_ea  <= s1_ea[7:0];
-        r1_eb  <= s1_ea[7:0] - 8'd1;
-        r1_ova <= s1_ea >= 10'sd255;
-        r1_ovb <= s1_ea >= 10'sd256;
-        r1_sta <= s1_tz + s1_sl <= 10'sd21;
-        r1_stb <= s1_tz + s1_sl <= 10'sd20;
+        // r = 24 - sl: 151 - sum when sl = e (saturated at 127: sum < 24
+        // shifts every bit out), else 24 - lz.
+        r1_r   <= s1_le ? ((s1_sum < 9'd24) ? 7'd127 : 7'd23 - s1_sum[6:0])
+                        : 7'd24 - {1'b0, s1_lz};
+        r1_low <= !s1_le;
+        // The exponent fields e + 1 - lz and e - lz when sl = lz (sum - lz -
+        // 126 and - 127); 1 and 0 when sl = e, where the leading one can be
+        // at bit 47 - sl only at exponent 1.
+        r1_ea  <= s1_le ? 8'd1 : s1_sum[7:0] - {2'd0, s1_lz} - 8'd126;
+        r1_eb  <= s1_le ? 8'd0 : s1_sum[7:0] - {2'd0, s1_lz} - 8'd127;
+        r1_ova <= !s1_le && {1'b0, s1_sum} >= {4'd0, s1_lz} + 10'd381;
+        r1_ovb <= !s1_le && {1'b0, s1_sum} >= {4'd0, s1_lz} + 10'd382;
+        // Sticky: p's trailing zeros tz against T - 26 (tz + sl <= 21, or
+        // <= 20 one bit lower).
+        r1_sta <= s1_le ? {1'b0, s1_sum} + {4'd0, s1_tz} <= 10'd148
+                        : {1'b0, s1_tz} + {1'b0, s1_lz} <= 7'd21;
+        r1_stb <= s1_le ? {1'b0, s1_sum} + {4'd0, s1_tz} <= 10'd147
+                        : {1'b0, s1_tz} + {1'b0, s1_lz} <= 7'd20;
 
         r1_special <= 1'b1;
         if (a_nan || b_nan || (a_inf && b_zero) || (a_zero && b_inf))

@@ -18,7 +18,8 @@
 //! define them cycle by cycle):
 //! * `mult1`: the first product of an element enters the multiplier; its
 //!   result is ready after the multiplier latency `L_mul`.
-//! * `mult2`: the second product enters one cycle later (pipelined); 1 cycle.
+//! * `mult2`: the second product enters one cycle later (pipelined); 1 cycle
+//!   (none when the core forwards it, [`HwConfig::forward`]).
 //! * `multadd`: the adder accumulates the products, `((p1 + p2) + p3)`, one
 //!   addition of latency `L_add` after another (the later products are
 //!   ready by then).
@@ -32,7 +33,8 @@
 //! `L_mul + 1 + (k - 1) L_add` cycles; every state visit adds
 //! `transition` cycles (the state register and the write into the
 //! intermediate bank). Steps run one after another, as in the papers' FSM
-//! (no overlap of independent steps).
+//! (no overlap of independent steps; the Verilog core runs step 6 beside
+//! step 1, [`HwConfig::o5_beside`]).
 //!
 //! # Schedules
 //! * [`Schedule::Inverse2x2`]: the papers' 11 steps (spec section 1, n = 3,
@@ -155,6 +157,15 @@ pub struct HwConfig {
     pub dividers: usize,
     /// Clock frequency (Hz, > 0; the papers' timings are at 50 MHz).
     pub clock_hz: f64,
+    /// The second product of a dot product enters the adder in the cycle it
+    /// leaves the multiplier, so `mult2` takes no cycle of its own (the
+    /// Verilog core; the papers' FSM has the state, `false`).
+    pub forward: bool,
+    /// Step 6, `O5 = z - h(X-)`, which needs only inputs, runs beside step 1
+    /// on two of the datapaths step 1 leaves idle, and has no wave of its
+    /// own (the Verilog core; `false` in the papers' strictly sequential
+    /// FSM). It needs `datapaths >= 8`: with fewer, step 6 keeps its wave.
+    pub o5_beside: bool,
 }
 
 impl Default for HwConfig {
@@ -166,6 +177,8 @@ impl Default for HwConfig {
             datapaths: 9,
             dividers: 4,
             clock_hz: 50e6,
+            forward: false,
+            o5_beside: false,
         }
     }
 }
@@ -388,13 +401,16 @@ impl Machine {
             acc
         });
         let l = self.cfg.latencies;
+        let multadd = (K as u64 - 1) * l.add;
         let states: &[(State, u64)] = if K == 1 {
             &[(State::Mult1, l.mul)]
+        } else if self.cfg.forward {
+            &[(State::Mult1, l.mul), (State::Multadd, multadd)]
         } else {
             &[
                 (State::Mult1, l.mul),
                 (State::Mult2, 1),
-                (State::Multadd, (K as u64 - 1) * l.add),
+                (State::Multadd, multadd),
             ]
         };
         self.charge(
@@ -433,6 +449,17 @@ impl Machine {
         out
     }
 
+    /// `a - b` element-wise in f32 on datapaths the step before leaves idle
+    /// ([`HwConfig::o5_beside`]): no wave of its own.
+    fn subtract_beside<const R: usize, const C: usize>(
+        &mut self,
+        a: &SMatrix<f32, R, C>,
+        b: &SMatrix<f32, R, C>,
+    ) -> SMatrix<f32, R, C> {
+        self.done.add += R * C;
+        a - b
+    }
+
     /// `a / s` element-wise in f32 on the dividers. A divider is
     /// pipelined: it takes one division a cycle, so the step's `e`
     /// divisions on `d` dividers take one visit of `div1` of
@@ -460,14 +487,19 @@ impl Machine {
     fn inverse2(&mut self, step: &'static str, o3: &Matrix2<f32>) -> Result<Matrix2<f32>, HwError> {
         let det = o3[(0, 0)] * o3[(1, 1)] - o3[(0, 1)] * o3[(1, 0)];
         let l = self.cfg.latencies;
-        self.charge(
-            step,
-            1,
+        let states: &[(State, u64)] = if self.cfg.forward {
+            &[(State::Mult1, l.mul), (State::Add, l.add)]
+        } else {
             &[
                 (State::Mult1, l.mul),
                 (State::Mult2, 1),
                 (State::Add, l.add),
-            ],
+            ]
+        };
+        self.charge(
+            step,
+            1,
+            states,
             OpCounts {
                 mul: 2,
                 add: 1,
@@ -518,7 +550,12 @@ pub fn run(cfg: &HwConfig, schedule: Schedule, inp: &CoreInputs) -> Result<CoreR
             let o3 = m.addsub("3 O3 = O2 + R", &o2, &inp.r, false);
             let o4 = m.inverse2("4 O4 = inv(O3)", &o3)?;
             let g = m.matmul("5 G = O1 O4", &o1, &o4);
-            let o5 = m.addsub("6 O5 = z - h(X-)", &inp.z, &inp.hx, true);
+            // Step 1 fills six datapaths; O5 takes two more.
+            let o5 = if cfg.o5_beside && cfg.datapaths >= 8 {
+                m.subtract_beside(&inp.z, &inp.hx)
+            } else {
+                m.addsub("6 O5 = z - h(X-)", &inp.z, &inp.hx, true)
+            };
             let o6 = m.matmul("7 O6 = G O5", &g, &o5);
             let x = m.addsub("8 X+ = X- + O6", &inp.x, &o6, false);
             let o7 = m.matmul("9 O7 = G H", &g, &inp.h);

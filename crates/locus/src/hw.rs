@@ -150,13 +150,13 @@ pub fn run(args: &Args) -> Result<()> {
         datapaths: args.datapaths,
         dividers: args.dividers,
         clock_hz: args.clock_mhz * 1e6,
+        ..HwConfig::default()
     };
     cfg.validate()?;
     if let Some(dir) = &args.export_vectors {
         let built = HwConfig {
-            latencies: locus_hw::hdl::built_latencies()?,
-            dividers: locus_hw::hdl::BUILT_DIVIDERS,
-            ..cfg
+            clock_hz: cfg.clock_hz,
+            ..locus_hw::hdl::built_config()?
         };
         let e = crate::hw_rtl::export(dir, args.unit_vectors, args.core_vectors, &built)?;
         println!(

@@ -6,7 +6,7 @@
 //!   input), `fp_mul` and `fp_div`, their shared functions `fp_common.vh`
 //!   (unpack with subnormal normalisation, round to nearest even and pack
 //!   with gradual underflow) and their latencies `fp_latency.vh` (add 4,
-//!   mul 3, div 9 cycles, each with its operands registered first: `y` holds the result of the operands sampled at
+//!   mul 3, div 13 cycles, each with its operands registered first: `y` holds the result of the operands sampled at
 //!   rising edge `t` from just after edge `t + L - 1`, one operation per
 //!   clock);
 //! * `hdl/tb/tb_fp.v`: one testbench for the three units, fed with a vector
@@ -72,8 +72,9 @@ impl HdlError {
 pub const BUILT_DIVIDERS: usize = 1;
 
 /// The cycle-level model's configuration of the Verilog core: its units'
-/// latencies ([`built_latencies`]) and its [`BUILT_DIVIDERS`] dividers, on
-/// the papers' nine datapaths at their 50 MHz.
+/// latencies ([`built_latencies`]), its [`BUILT_DIVIDERS`] dividers, the
+/// second product forwarded into the adder and step 6 beside step 1, on the
+/// papers' nine datapaths at their 50 MHz.
 ///
 /// # Errors
 /// Those of [`built_latencies`].
@@ -81,6 +82,8 @@ pub fn built_config() -> Result<HwConfig, HdlError> {
     Ok(HwConfig {
         latencies: built_latencies()?,
         dividers: BUILT_DIVIDERS,
+        forward: true,
+        o5_beside: true,
         ..HwConfig::default()
     })
 }
