@@ -9,9 +9,17 @@
 // each; one divider, fed one division a cycle, costs three cycles and saves
 // three dividers). Step 4 is the determinant a d - b c on datapath 0, then
 // the four divisions d/det, -b/det, -c/det, a/det (negation flips the sign
-// bit), entering the divider in that order. Step 6, O5 = z - h(X-), needs
-// only inputs: it runs beside step 1 on the adders of datapaths 6 and 7,
-// which step 1 (six elements) leaves idle, and has no wave of its own.
+// bit), entering the divider in that order.
+//
+// Three steps have no wave of their own: they run on operators another
+// step's wave leaves idle.
+//   6 O5 = z - h(X-) (inputs only): beside step 1, on the adders of
+//     datapaths 6 and 7 (step 1 has six elements), presented at w = 0.
+//   7 O6 = G O5: inside step 9's wave (O7 = G H), on datapaths 0-2, whose
+//     multipliers take O6's products at w = 2 and 3, after O7's two; its
+//     sum leaves two cycles after O7's, so that wave is two cycles longer.
+//   8 X+ = X- + O6: beside step 10, on the adders of datapaths 0-2,
+//     presented at w = 0 (step 10's first sum enters at w = Lm + 1).
 //
 // Every element is computed in the order of the software reference
 // (locus_hw::run): a dot product of length k is
@@ -88,9 +96,15 @@ module ekf_core (
         endcase
     endfunction
 
-    // Cycles of a wave of each kind.
-    function [5:0] length_of(input [2:0] kind);
-        case (kind)
+    // O6's second product leaves the multiplier, and its sum enters the
+    // adder, at this cycle of step 9's wave.
+    localparam integer O6_SUM = LM + 3;
+
+    // Cycles of each step's wave.
+    function [5:0] length_of(input [3:0] step);
+        if (step == T_O7)
+            length_of = O6_SUM + LA + 1;
+        else case (kind_of(step))
             K_DOT3:        length_of = SUM0 + 2 * LA + 1;
             K_DOT2, K_DET: length_of = SUM0 + LA + 1;
             K_DIV:         length_of = LD + 4;
@@ -132,7 +146,7 @@ module ekf_core (
     reg [5:0] w;          // cycle within the wave (or within waiting)
     reg       waiting;    // the two waiting cycles after start
     wire [2:0] kind = kind_of(step);
-    wire       last = !waiting && (w == length_of(kind) - 1);
+    wire       last = !waiting && (w == length_of(step) - 1);
     // The product index entering the multipliers this cycle.
     wire [1:0] k = (w < 3) ? w[1:0] : 2'd0;
 
@@ -164,8 +178,8 @@ module ekf_core (
                 busy <= 1'b0;
                 done <= 1'b1;
             end else begin
-                // O5 was computed beside step 1.
-                step <= (step == T_G) ? T_O6 : step + 4'd1;
+                // Steps 6-8 run inside the waves of steps 1, 9 and 10.
+                step <= (step == T_G) ? T_O7 : step + 4'd1;
             end
         end else begin
             w <= w + 6'd1;
@@ -188,8 +202,13 @@ module ekf_core (
     // ---- register bank ---------------------------------------------------
     wire [32*NREG-1:0] bank;
     wire [31:0] result [0:8];
-    // O5 leaves the adders of datapaths 6 and 7 at w = LA of step 1.
-    wire o5_ready = busy && !waiting && step == T_O1 && w == LA;
+    // When the results of steps 6-9 leave the adders: O5 (datapaths 6, 7)
+    // at w = LA of step 1; O7 at w = SUM0 + LA and O6 (datapaths 0-2) at
+    // the end of step 9's wave; X+ (datapaths 0-2) at w = LA of step 10.
+    wire running  = busy && !waiting;
+    wire o5_ready = running && step == T_O1 && w == LA;
+    wire o7_ready = running && step == T_O7 && w == SUM0 + LA;
+    wire xp_ready = running && step == T_O8 && w == LA;
     assign rd_data = (rd_addr < NREG) ? bank[32*rd_addr +: 32] : 32'd0;
 
     genvar r;
@@ -203,6 +222,15 @@ module ekf_core (
                 else if (owner_step(r) == T_O5) begin
                     if (o5_ready)
                         q <= result[6 + r - O5];
+                end else if (owner_step(r) == T_O7) begin
+                    if (o7_ready)
+                        q <= result[r - O7];
+                end else if (owner_step(r) == T_O6) begin
+                    if (busy && last && step == T_O7)
+                        q <= result[r - O6];
+                end else if (owner_step(r) == T_XP) begin
+                    if (xp_ready)
+                        q <= result[r - XP];
                 end else if (owner_step(r) >= 0 && busy && last && step == owner_step(r))
                     q <= result[r - owner_base(r)];
             end
@@ -251,12 +279,19 @@ module ekf_core (
             reg  [31:0] oa, ob;      // operands from the bank
             reg  [31:0] p0, p2;      // products caught from the multiplier
             wire [31:0] mul_y, add_y;
-            // Datapaths 6 and 7 subtract O5 = z - h(X-) during step 1.
+            // Datapaths 6 and 7 subtract O5 = z - h(X-) during step 1;
+            // datapaths 0-2 add X+ = X- + O6 at the start of step 10.
             wire        o5 = (e == 6 || e == 7) && step == T_O1;
+            wire        xp = e < 3 && step == T_O8 && w == 0;
             wire        elementwise = kind == K_ADD || kind == K_SUB || o5;
-            wire [31:0] add_a = elementwise ? oa : (w == SUM0) ? p0 : add_y;
-            wire [31:0] add_b = elementwise ? ob : (w == SUM0) ? mul_y : p2;
-            wire        add_sub = (kind == K_SUB || kind == K_DET || o5);
+            // In a dot product's wave the adder takes (p0 + p1) at SUM0, O6's
+            // (p0 + p1) at O6_SUM (step 9, datapaths 0-2; its first product
+            // is caught in p2) and (sum + p2) at SUM0 + LA.
+            wire [31:0] add_a = xp ? `B(X + e) : elementwise ? oa :
+                                (w == SUM0) ? p0 : (w == O6_SUM) ? p2 : add_y;
+            wire [31:0] add_b = xp ? `B(O6 + e) : elementwise ? ob :
+                                (w == SUM0 || w == O6_SUM) ? mul_y : p2;
+            wire        add_sub = !xp && (kind == K_SUB || kind == K_DET || o5);
 
             always @* begin
                 case (step)
@@ -272,9 +307,14 @@ module ekf_core (
                         ob = (k == 2'd0) ? `B(O3 + 3) : `B(O3 + 2);
                     end
                     T_G:  begin oa = `SEL(O1 + 2 * I2, 1); ob = `SEL(O4 + J2, 2);     end
-                    T_O6: begin oa = `SEL(G + 2 * (e % 3), 1); ob = `SEL(O5, 1);      end
-                    T_XP: begin oa = `B(X + e % 3);        ob = `B(O6 + e % 3);       end
-                    T_O7: begin oa = `SEL(G + 2 * I3, 1);  ob = `SEL(H + J3, 3);      end
+                    // O6 = G O5's products enter datapaths 0-2 at w = 2, 3.
+                    T_O7: if (e < 3 && w == 2) begin
+                              oa = `B(G + 2 * e);          ob = `B(O5);
+                          end else if (e < 3 && w == 3) begin
+                              oa = `B(G + 2 * e + 1);      ob = `B(O5 + 1);
+                          end else begin
+                              oa = `SEL(G + 2 * I3, 1);    ob = `SEL(H + J3, 3);
+                          end
                     T_O8: begin oa = `SEL(O7 + 3 * I3, 1); ob = `SEL(P + J3, 3);      end
                     default: begin oa = `B(P + e);         ob = `B(O8 + e);           end
                 endcase

@@ -33,8 +33,8 @@
 //! `L_mul + 1 + (k - 1) L_add` cycles; every state visit adds
 //! `transition` cycles (the state register and the write into the
 //! intermediate bank). Steps run one after another, as in the papers' FSM
-//! (no overlap of independent steps; the Verilog core runs step 6 beside
-//! step 1, [`HwConfig::o5_beside`]).
+//! (no overlap of independent steps; the Verilog core runs steps 6-8 on
+//! operators other steps leave idle, [`HwConfig::overlap`]).
 //!
 //! # Schedules
 //! * [`Schedule::Inverse2x2`]: the papers' 11 steps (spec section 1, n = 3,
@@ -161,11 +161,16 @@ pub struct HwConfig {
     /// leaves the multiplier, so `mult2` takes no cycle of its own (the
     /// Verilog core; the papers' FSM has the state, `false`).
     pub forward: bool,
-    /// Step 6, `O5 = z - h(X-)`, which needs only inputs, runs beside step 1
-    /// on two of the datapaths step 1 leaves idle, and has no wave of its
-    /// own (the Verilog core; `false` in the papers' strictly sequential
-    /// FSM). It needs `datapaths >= 8`: with fewer, step 6 keeps its wave.
-    pub o5_beside: bool,
+    /// Steps 6-8 run on operators other steps' waves leave idle, with no
+    /// wave of their own (the Verilog core; `false` in the papers' strictly
+    /// sequential FSM): `O5 = z - h(X-)` beside step 1 (two adders step 1's
+    /// six elements leave idle); `O6 = G O5` inside step 9's wave (three
+    /// multipliers take its products after O7's, and its sums leave the
+    /// adders two cycles after O7's, so that wave's `multadd` is two cycles
+    /// longer); `X+ = X- + O6` beside step 10 (three adders, before step
+    /// 10's first sum). It needs nine datapaths (step 9 in one wave): with
+    /// fewer, the three steps keep their waves.
+    pub overlap: bool,
 }
 
 impl Default for HwConfig {
@@ -178,7 +183,7 @@ impl Default for HwConfig {
             dividers: 4,
             clock_hz: 50e6,
             forward: false,
-            o5_beside: false,
+            overlap: false,
         }
     }
 }
@@ -393,13 +398,7 @@ impl Machine {
         a: &SMatrix<f32, R, K>,
         b: &SMatrix<f32, K, C>,
     ) -> SMatrix<f32, R, C> {
-        let out = SMatrix::<f32, R, C>::from_fn(|i, j| {
-            let mut acc = a[(i, 0)] * b[(0, j)];
-            for k in 1..K {
-                acc += a[(i, k)] * b[(k, j)];
-            }
-            acc
-        });
+        let out = product(a, b);
         let l = self.cfg.latencies;
         let multadd = (K as u64 - 1) * l.add;
         let states: &[(State, u64)] = if K == 1 {
@@ -449,15 +448,20 @@ impl Machine {
         out
     }
 
-    /// `a - b` element-wise in f32 on datapaths the step before leaves idle
-    /// ([`HwConfig::o5_beside`]): no wave of its own.
-    fn subtract_beside<const R: usize, const C: usize>(
-        &mut self,
-        a: &SMatrix<f32, R, C>,
-        b: &SMatrix<f32, R, C>,
-    ) -> SMatrix<f32, R, C> {
-        self.done.add += R * C;
-        a - b
+    /// Counts `ops` executed on operators another step's wave leaves idle
+    /// ([`HwConfig::overlap`]): no cycles of their own.
+    fn beside(&mut self, ops: OpCounts) {
+        self.done.mul += ops.mul;
+        self.done.add += ops.add;
+        self.done.div += ops.div;
+    }
+
+    /// Lengthens the last state visit by `cycles`.
+    fn extend_last(&mut self, cycles: u64) {
+        if let Some(last) = self.trace.last_mut() {
+            last.cycles += cycles;
+            self.cycle += cycles;
+        }
     }
 
     /// `a / s` element-wise in f32 on the dividers. A divider is
@@ -535,6 +539,21 @@ impl Machine {
     }
 }
 
+/// `a b` with each element `((a0 b0 + a1 b1) + a2 b2)` in f32, the order
+/// of the core's datapaths.
+fn product<const R: usize, const K: usize, const C: usize>(
+    a: &SMatrix<f32, R, K>,
+    b: &SMatrix<f32, K, C>,
+) -> SMatrix<f32, R, C> {
+    SMatrix::<f32, R, C>::from_fn(|i, j| {
+        let mut acc = a[(i, 0)] * b[(0, j)];
+        for k in 1..K {
+            acc += a[(i, k)] * b[(k, j)];
+        }
+        acc
+    })
+}
+
 /// Runs one correction on the modelled core: the arithmetic in f32 in the
 /// schedule's order, and the cycles of every state visit.
 ///
@@ -550,18 +569,31 @@ pub fn run(cfg: &HwConfig, schedule: Schedule, inp: &CoreInputs) -> Result<CoreR
             let o3 = m.addsub("3 O3 = O2 + R", &o2, &inp.r, false);
             let o4 = m.inverse2("4 O4 = inv(O3)", &o3)?;
             let g = m.matmul("5 G = O1 O4", &o1, &o4);
-            // Step 1 fills six datapaths; O5 takes two more.
-            let o5 = if cfg.o5_beside && cfg.datapaths >= 8 {
-                m.subtract_beside(&inp.z, &inp.hx)
+            if cfg.overlap && cfg.datapaths >= 9 {
+                // Steps 6-8 inside the waves of steps 1, 9 and 10 (the
+                // values as computed in the schedule's order).
+                let o5 = inp.z - inp.hx;
+                let o6 = product(&g, &o5);
+                let x = inp.x + o6;
+                m.beside(OpCounts {
+                    mul: 6,
+                    add: 2 + 3 + 3,
+                    div: 0,
+                });
+                let o7 = m.matmul("9 O7 = G H, 7 O6 = G O5", &g, &inp.h);
+                m.extend_last(2);
+                let o8 = m.matmul("10 O8 = O7 P-, 8 X+ = X- + O6", &o7, &inp.p);
+                let p = m.addsub("11 P+ = P- - O8", &inp.p, &o8, true);
+                m.finish(x, p, g)
             } else {
-                m.addsub("6 O5 = z - h(X-)", &inp.z, &inp.hx, true)
-            };
-            let o6 = m.matmul("7 O6 = G O5", &g, &o5);
-            let x = m.addsub("8 X+ = X- + O6", &inp.x, &o6, false);
-            let o7 = m.matmul("9 O7 = G H", &g, &inp.h);
-            let o8 = m.matmul("10 O8 = O7 P-", &o7, &inp.p);
-            let p = m.addsub("11 P+ = P- - O8", &inp.p, &o8, true);
-            m.finish(x, p, g)
+                let o5 = m.addsub("6 O5 = z - h(X-)", &inp.z, &inp.hx, true);
+                let o6 = m.matmul("7 O6 = G O5", &g, &o5);
+                let x = m.addsub("8 X+ = X- + O6", &inp.x, &o6, false);
+                let o7 = m.matmul("9 O7 = G H", &g, &inp.h);
+                let o8 = m.matmul("10 O8 = O7 P-", &o7, &inp.p);
+                let p = m.addsub("11 P+ = P- - O8", &inp.p, &o8, true);
+                m.finish(x, p, g)
+            }
         }
         Schedule::Scalar => {
             if inp.r[(0, 1)] != 0.0 || inp.r[(1, 0)] != 0.0 {

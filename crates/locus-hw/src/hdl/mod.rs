@@ -73,8 +73,8 @@ pub const BUILT_DIVIDERS: usize = 1;
 
 /// The cycle-level model's configuration of the Verilog core: its units'
 /// latencies ([`built_latencies`]), its [`BUILT_DIVIDERS`] dividers, the
-/// second product forwarded into the adder and step 6 beside step 1, on the
-/// papers' nine datapaths at their 50 MHz.
+/// second product forwarded into the adder and steps 6-8 on operators other
+/// steps leave idle, on the papers' nine datapaths at their 50 MHz.
 ///
 /// # Errors
 /// Those of [`built_latencies`].
@@ -83,7 +83,7 @@ pub fn built_config() -> Result<HwConfig, HdlError> {
         latencies: built_latencies()?,
         dividers: BUILT_DIVIDERS,
         forward: true,
-        o5_beside: true,
+        overlap: true,
         ..HwConfig::default()
     })
 }
