@@ -27,10 +27,10 @@
 // so the core's results equal the software f32 schedule bit for bit.
 //
 // Processor interface (the papers' Nios II side): while not busy, write the
-// input bank (X-, P-, H, R, z, h(X-); addresses below) with wr_en, pulse
-// start for one cycle; `done` rises when X+, P+ and G are in the bank and
-// stays high until the next start; read any register combinationally at
-// rd_addr.
+// input bank (X-, P-, H, R, z, h(X-); addresses below; writes to other
+// addresses are ignored) with wr_en, pulse start for one cycle; `done` rises
+// when X+, P+ and G are in the bank and stays high until the next start;
+// read any register combinationally at rd_addr.
 //
 // Timing (the FSM states of the papers' Fig. 3). Let Lm, La, Ld be the
 // multiplier, adder and divider latencies. After the edge that samples
@@ -216,10 +216,14 @@ module ekf_core (
         for (r = 0; r < NREG; r = r + 1) begin : regs
             reg [31:0] q;
             assign bank[32*r +: 32] = q;
+            // Only the inputs take the processor's writes (a write to a
+            // result's address is ignored), so a result register has one
+            // source and no multiplexer in front of it.
             always @(posedge clk) begin
-                if (!busy && wr_en && wr_addr == r)
-                    q <= wr_data;
-                else if (owner_step(r) == T_O5) begin
+                if (r < O1) begin
+                    if (!busy && wr_en && wr_addr == r)
+                        q <= wr_data;
+                end else if (owner_step(r) == T_O5) begin
                     if (o5_ready)
                         q <= result[6 + r - O5];
                 end else if (owner_step(r) == T_O7) begin
