@@ -14,7 +14,7 @@
 // Three steps have no wave of their own: they run on operators another
 // step's wave leaves idle.
 //   6 O5 = z - h(X-) (inputs only): beside step 1, on the adders of
-//     datapaths 6 and 7 (step 1 has six elements), presented at w = 0.
+//     datapaths 6 and 7 (step 1 has six elements), presented at w = 1.
 //   7 O6 = G O5: inside step 9's wave (O7 = G H), on datapaths 0-2, whose
 //     multipliers take O6's products at w = 2 and 3, after O7's two; its
 //     sum leaves two cycles after O7's, so that wave is two cycles longer.
@@ -38,7 +38,9 @@
 // state visits of (latency + 1) cycles, the +1 being the cycle whose end
 // writes the bank:
 //   dot product, k = 2 or 3: mult1 Lm + 1, multadd (k - 1) La + 1
-//   element-wise add or subtract: add La + 1;  four divisions: div1 Ld + 4
+//   element-wise add or subtract: add La + 2 (the operands pass the
+//   datapath's operand registers: the adder has none of its own);
+//   four divisions: div1 Ld + 4
 //   determinant: mult1 Lm + 1, add La + 1
 // In mult1 the k products enter the multiplier one per cycle and the first
 // is caught as it leaves; multadd feeds the adder (p0 + p1) with p1 taken
@@ -108,7 +110,7 @@ module ekf_core (
             K_DOT3:        length_of = SUM0 + 2 * LA + 1;
             K_DOT2, K_DET: length_of = SUM0 + LA + 1;
             K_DIV:         length_of = LD + 4;
-            default:       length_of = LA + 1;
+            default:       length_of = LA + 2;
         endcase
     endfunction
 
@@ -203,10 +205,10 @@ module ekf_core (
     wire [32*NREG-1:0] bank;
     wire [31:0] result [0:8];
     // When the results of steps 6-9 leave the adders: O5 (datapaths 6, 7)
-    // at w = LA of step 1; O7 at w = SUM0 + LA and O6 (datapaths 0-2) at
+    // at w = LA + 1 of step 1; O7 at w = SUM0 + LA and O6 (datapaths 0-2) at
     // the end of step 9's wave; X+ (datapaths 0-2) at w = LA of step 10.
     wire running  = busy && !waiting;
-    wire o5_ready = running && step == T_O1 && w == LA;
+    wire o5_ready = running && step == T_O1 && w == LA + 1;
     wire o7_ready = running && step == T_O7 && w == SUM0 + LA;
     wire xp_ready = running && step == T_O8 && w == LA;
     assign rd_data = (rd_addr < NREG) ? bank[32*rd_addr +: 32] : 32'd0;
@@ -281,6 +283,7 @@ module ekf_core (
             // result (3 columns).
             localparam integer I2 = e / 2, J2 = e % 2, I3 = e / 3, J3 = e % 3;
             reg  [31:0] oa, ob;      // operands from the bank
+            reg  [31:0] ra, rb;      // the same, registered: element-wise operands
             reg  [31:0] p0, p2;      // products caught from the multiplier
             wire [31:0] mul_y, add_y;
             // Datapaths 6 and 7 subtract O5 = z - h(X-) during step 1;
@@ -291,9 +294,9 @@ module ekf_core (
             // In a dot product's wave the adder takes (p0 + p1) at SUM0, O6's
             // (p0 + p1) at O6_SUM (step 9, datapaths 0-2; its first product
             // is caught in p2) and (sum + p2) at SUM0 + LA.
-            wire [31:0] add_a = xp ? `B(X + e) : elementwise ? oa :
+            wire [31:0] add_a = xp ? `B(X + e) : elementwise ? ra :
                                 (w == SUM0) ? p0 : (w == O6_SUM) ? p2 : add_y;
-            wire [31:0] add_b = xp ? `B(O6 + e) : elementwise ? ob :
+            wire [31:0] add_b = xp ? `B(O6 + e) : elementwise ? rb :
                                 (w == SUM0 || w == O6_SUM) ? mul_y : p2;
             wire        add_sub = !xp && (kind == K_SUB || kind == K_DET || o5);
 
@@ -325,11 +328,13 @@ module ekf_core (
             end
 
             fp_mul mul (.clk(clk), .a_in(oa), .b_in(ob), .y(mul_y));
-            fp_add add (.clk(clk), .a_in(add_a), .b_in(add_b), .sub_in(add_sub), .y(add_y));
+            fp_add add (.clk(clk), .a(add_a), .b(add_b), .sub(add_sub), .y(add_y));
 
             // Products leave the multiplier LM cycles after entering it; p1
             // goes straight into the adder.
             always @(posedge clk) begin
+                ra <= oa;
+                rb <= ob;
                 if (w == LM) p0 <= mul_y;
                 if (w == LM + 2) p2 <= mul_y;
             end

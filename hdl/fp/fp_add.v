@@ -2,10 +2,10 @@
 //
 // Round to nearest, ties to even; subnormal inputs and results (gradual
 // underflow); x + (-x) = +0; any NaN operand or inf - inf gives the
-// canonical quiet NaN 0x7FC00000. Pipelined with latency `FP_ADD_LAT (4,
+// canonical quiet NaN 0x7FC00000. Pipelined with latency `FP_ADD_LAT (3,
 // see fp_latency.vh for the edge at which y appears), one operation per
-// clock:
-//   stage 0: the operands registered;
+// clock. Unlike the multiplier and the divider it does not register its
+// operands first: the core feeds it only from registers (fp_latency.vh).
 //   stage 1: classify, order the operands by magnitude, align the smaller
 //            one (guard, round and sticky bits);
 //   stage 2: add or subtract the significands, count leading zeros;
@@ -21,22 +21,12 @@
 
 module fp_add (
     input  wire        clk,
-    input  wire [31:0] a_in,
-    input  wire [31:0] b_in,
-    input  wire        sub_in,
+    input  wire [31:0] a,
+    input  wire [31:0] b,
+    input  wire        sub,
     output wire [31:0] y
 );
 `include "fp_common.vh"
-
-    // ---- stage 0: the operands registered (fp_latency.vh says why) ----
-    reg [31:0] a;
-    reg [31:0] b;
-    reg sub;
-    always @(posedge clk) begin
-        a <= a_in;
-        b <= b_in;
-        sub <= sub_in;
-    end
 
     // Each stage is one clocked block: its combinational logic is written
     // with blocking assignments to temporaries (assigned before use on every

@@ -25,7 +25,7 @@ module tb_fp;
     wire clk_mul = clk & en_mul;
     wire clk_div = clk & en_div;
 
-    fp_add u_add (.clk(clk_add), .a_in(a_add), .b_in(b_add), .sub_in(sub_add), .y(y_add));
+    fp_add u_add (.clk(clk_add), .a(a_add), .b(b_add), .sub(sub_add), .y(y_add));
     fp_mul u_mul (.clk(clk_mul), .a_in(a_mul), .b_in(b_mul), .y(y_mul));
     fp_div u_div (.clk(clk_div), .a_in(a_div), .b_in(b_div), .y(y_div));
 

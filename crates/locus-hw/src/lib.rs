@@ -171,6 +171,11 @@ pub struct HwConfig {
     /// 10's first sum). It needs nine datapaths (step 9 in one wave): with
     /// fewer, the three steps keep their waves.
     pub overlap: bool,
+    /// Element-wise sums and differences take one cycle more: their
+    /// operands pass a register before the adder (the Verilog core, whose
+    /// adder has no operand register of its own; `false` in the papers'
+    /// reading, where the operator's latency covers it).
+    pub elementwise_register: bool,
 }
 
 impl Default for HwConfig {
@@ -184,6 +189,7 @@ impl Default for HwConfig {
             clock_hz: 50e6,
             forward: false,
             overlap: false,
+            elementwise_register: false,
         }
     }
 }
@@ -435,10 +441,11 @@ impl Machine {
     ) -> SMatrix<f32, R, C> {
         let out = if subtract { a - b } else { a + b };
         let l = self.cfg.latencies;
+        let latency = l.add + u64::from(self.cfg.elementwise_register);
         self.charge(
             step,
             R * C,
-            &[(State::Add, l.add)],
+            &[(State::Add, latency)],
             OpCounts {
                 mul: 0,
                 add: 1,

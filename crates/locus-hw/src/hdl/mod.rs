@@ -5,8 +5,8 @@
 //! * `hdl/fp/`: pipelined IEEE 754 binary32 units `fp_add` (with a `sub`
 //!   input), `fp_mul` and `fp_div`, their shared functions `fp_common.vh`
 //!   (unpack with subnormal normalisation, round to nearest even and pack
-//!   with gradual underflow) and their latencies `fp_latency.vh` (add 4,
-//!   mul 3, div 13 cycles, each with its operands registered first: `y` holds the result of the operands sampled at
+//!   with gradual underflow) and their latencies `fp_latency.vh` (add 3,
+//!   mul 3, div 13 cycles; the multiplier and the divider register their operands first): `y` holds the result of the operands sampled at
 //!   rising edge `t` from just after edge `t + L - 1`, one operation per
 //!   clock);
 //! * `hdl/tb/tb_fp.v`: one testbench for the three units, fed with a vector
@@ -73,8 +73,9 @@ pub const BUILT_DIVIDERS: usize = 1;
 
 /// The cycle-level model's configuration of the Verilog core: its units'
 /// latencies ([`built_latencies`]), its [`BUILT_DIVIDERS`] dividers, the
-/// second product forwarded into the adder and steps 6-8 on operators other
-/// steps leave idle, on the papers' nine datapaths at their 50 MHz.
+/// second product forwarded into the adder, steps 6-8 on operators other
+/// steps leave idle and element-wise operands registered before the adder,
+/// on the papers' nine datapaths at their 50 MHz.
 ///
 /// # Errors
 /// Those of [`built_latencies`].
@@ -84,6 +85,7 @@ pub fn built_config() -> Result<HwConfig, HdlError> {
         dividers: BUILT_DIVIDERS,
         forward: true,
         overlap: true,
+        elementwise_register: true,
         ..HwConfig::default()
     })
 }
