@@ -152,39 +152,43 @@ module ekf_core (
     // The product index entering the multipliers this cycle.
     wire [1:0] k = (w < 3) ? w[1:0] : 2'd0;
 
+    // The step and cycle of the next clock: the adders' operand selects are
+    // decoded from them a cycle ahead, into registers (below).
+    reg [3:0] step_n;
+    reg [5:0] w_n;
+    always @* begin
+        step_n = step;
+        w_n = w + 6'd1;
+        if (rst || !busy) begin
+            step_n = 4'd0;
+            w_n = 6'd0;
+        end else if (waiting) begin
+            if (w == 6'd1) w_n = 6'd0;
+        end else if (last) begin
+            w_n = 6'd0;
+            // Steps 6-8 run inside the waves of steps 1, 9 and 10.
+            if (step != T_PP) step_n = (step == T_G) ? T_O7 : step + 4'd1;
+        end
+    end
+
     always @(posedge clk) begin
+        step <= step_n;
+        w <= w_n;
         if (rst) begin
             busy <= 1'b0;
             done <= 1'b0;
             waiting <= 1'b0;
-            step <= 4'd0;
-            w <= 6'd0;
         end else if (!busy) begin
             if (start) begin
                 busy <= 1'b1;
                 done <= 1'b0;
                 waiting <= 1'b1;
-                step <= 4'd0;
-                w <= 6'd0;
             end
         end else if (waiting) begin
-            if (w == 6'd1) begin
-                waiting <= 1'b0;
-                w <= 6'd0;
-            end else begin
-                w <= w + 6'd1;
-            end
-        end else if (last) begin
-            w <= 6'd0;
-            if (step == T_PP) begin
-                busy <= 1'b0;
-                done <= 1'b1;
-            end else begin
-                // Steps 6-8 run inside the waves of steps 1, 9 and 10.
-                step <= (step == T_G) ? T_O7 : step + 4'd1;
-            end
-        end else begin
-            w <= w + 6'd1;
+            if (w == 6'd1) waiting <= 1'b0;
+        end else if (last && step == T_PP) begin
+            busy <= 1'b0;
+            done <= 1'b1;
         end
     end
 
@@ -286,19 +290,29 @@ module ekf_core (
             reg  [31:0] ra, rb;      // the same, registered: element-wise operands
             reg  [31:0] p0, p2;      // products caught from the multiplier
             wire [31:0] mul_y, add_y;
-            // Datapaths 6 and 7 subtract O5 = z - h(X-) during step 1;
-            // datapaths 0-2 add X+ = X- + O6 at the start of step 10.
-            wire        o5 = (e == 6 || e == 7) && step == T_O1;
-            wire        xp = e < 3 && step == T_O8 && w == 0;
-            wire        elementwise = kind == K_ADD || kind == K_SUB || o5;
-            // In a dot product's wave the adder takes (p0 + p1) at SUM0, O6's
-            // (p0 + p1) at O6_SUM (step 9, datapaths 0-2; its first product
-            // is caught in p2) and (sum + p2) at SUM0 + LA.
-            wire [31:0] add_a = xp ? `B(X + e) : elementwise ? ra :
-                                (w == SUM0) ? p0 : (w == O6_SUM) ? p2 : add_y;
-            wire [31:0] add_b = xp ? `B(O6 + e) : elementwise ? rb :
-                                (w == SUM0 || w == O6_SUM) ? mul_y : p2;
-            wire        add_sub = !xp && (kind == K_SUB || kind == K_DET || o5);
+            // The adder's operands. Datapaths 6 and 7 subtract O5 = z - h(X-)
+            // during step 1; datapaths 0-2 add X+ = X- + O6 at the start of
+            // step 10. In a dot product's wave the adder takes (p0 + p1) at
+            // SUM0, O6's (p0 + p1) at O6_SUM (step 9, datapaths 0-2; its
+            // first product is caught in p2) and (sum + p2) at SUM0 + LA.
+            // The selects are decoded a cycle ahead into registers of this
+            // datapath's own, so that no decode or wide fan-out stands
+            // before the adder.
+            wire [2:0]  kind_n = kind_of(step_n);
+            wire        o5_n = (e == 6 || e == 7) && step_n == T_O1;
+            wire        xp_n = e < 3 && step_n == T_O8 && w_n == 6'd0;
+            (* keep *) reg sel_xp, sel_elem, sel_sum0, sel_o6, add_sub;
+            always @(posedge clk) begin
+                sel_xp   <= xp_n;
+                sel_elem <= kind_n == K_ADD || kind_n == K_SUB || o5_n;
+                sel_sum0 <= w_n == SUM0;
+                sel_o6   <= w_n == O6_SUM;
+                add_sub  <= !xp_n && (kind_n == K_SUB || kind_n == K_DET || o5_n);
+            end
+            wire [31:0] add_a = sel_xp ? `B(X + e) : sel_elem ? ra :
+                                sel_sum0 ? p0 : sel_o6 ? p2 : add_y;
+            wire [31:0] add_b = sel_xp ? `B(O6 + e) : sel_elem ? rb :
+                                (sel_sum0 || sel_o6) ? mul_y : p2;
 
             always @* begin
                 case (step)
