@@ -3,23 +3,28 @@
 //   1 O1 = P- H^T      2 O2 = H O1       3 O3 = O2 + R     4 O4 = inv(O3)
 //   5 G = O1 O4        6 O5 = z - h(X-)  7 O6 = G O5       8 X+ = X- + O6
 //   9 O7 = G H        10 O8 = O7 P-     11 P+ = P- - O8
-// on nine datapaths (one per element of the largest, 3x3, result), each
-// with a pipelined binary32 multiplier and adder/subtractor, and one
-// pipelined divider beside them (the papers give four datapaths a divider
-// each; one divider, fed one division a cycle, costs three cycles and saves
-// three dividers). Step 4 is the determinant a d - b c on datapath 0, then
+// on six datapaths (one per element of a 3x2 result), each with a
+// pipelined binary32 multiplier and adder/subtractor, and one pipelined
+// divider beside them. The papers' core has nine datapaths, one per element
+// of a 3x3 result, and four dividers: here a 3x3 step's row 2 (group 2)
+// runs on datapaths 3-5 in the same wave, while their units would idle, and
+// one divider, fed one division a cycle, costs three cycles and saves
+// three dividers. Step 4 is the determinant a d - b c on datapath 0, then
 // the four divisions d/det, -b/det, -c/det, a/det (negation flips the sign
 // bit), entering the divider in that order.
 //
 // Three steps have no wave of their own: they run on operators another
 // step's wave leaves idle.
-//   6 O5 = z - h(X-) (inputs only): beside step 1, on the adders of
-//     datapaths 6 and 7 (step 1 has six elements), presented at w = 1.
+//   6 O5 = z - h(X-) (inputs only): on the adders of datapaths 0 and 1 at
+//     the start of step 1, before its first sum.
 //   7 O6 = G O5: inside step 9's wave (O7 = G H), on datapaths 0-2, whose
-//     multipliers take O6's products at w = 2 and 3, after O7's two; its
-//     sum leaves two cycles after O7's, so that wave is two cycles longer.
+//     multipliers take O6's products at w = 2 and 3, after O7's two (group
+//     2 takes datapaths 3-5 then); its sums leave two cycles after O7's
+//     first six, so that wave is two cycles longer.
 //   8 X+ = X- + O6: beside step 10, on the adders of datapaths 0-2,
 //     presented at w = 0 (step 10's first sum enters at w = Lm + 1).
+// Group 2 costs step 10 La + 1 cycles (its products enter from w = La + 1,
+// so that its first sum follows group 1's last) and step 11 one.
 //
 // Every element is computed in the order of the software reference
 // (locus_hw::run): a dot product of length k is
@@ -47,8 +52,9 @@
 // straight from the multiplier as it leaves (so the papers' mult2 takes no
 // cycle of its own), then (sum + p2) as soon as the sum leaves the adder.
 // The cycle count is the cycle-level model's (`locus hw`) with these
-// latencies, a transition of one cycle, products forwarded and O5 beside
-// step 1 (locus_hw::hdl::built_config).
+// latencies, a transition of one cycle, six datapaths, products forwarded,
+// the steps overlapped as above and element-wise operands registered
+// (locus_hw::hdl::built_config).
 
 `include "fp_latency.vh"
 
@@ -70,6 +76,9 @@ module ekf_core (
     localparam O1 = 26, O2 = 32, O3 = 36, DET = 40, O4 = 41, G = 45,
                O5 = 51, O6 = 53, XP = 56, O7 = 59, O8 = 68, PP = 77;
     localparam NREG = 86;
+    // Datapaths: one per element of a 3x2 result; a 3x3 result's row 2
+    // (group 2) runs on datapaths 3-5 in the same wave.
+    localparam integer NL = 6;
 
     // The papers' FSM states (the `state` output).
     localparam [2:0] S_WAITING = 3'd0, S_MULT1 = 3'd1, S_MULT2 = 3'd2,
@@ -102,10 +111,19 @@ module ekf_core (
     // adder, at this cycle of step 9's wave.
     localparam integer O6_SUM = LM + 3;
 
+    // Group 2 of step 10 (elements 6-8 on datapaths 3-5): its products
+    // enter the multipliers from this cycle on, so that its first sum
+    // enters the adder one cycle after group 1's last.
+    localparam integer G2 = LA + 1;
+
     // Cycles of each step's wave.
     function [5:0] length_of(input [3:0] step);
         if (step == T_O7)
             length_of = O6_SUM + LA + 1;
+        else if (step == T_O8)
+            length_of = SUM0 + 3 * LA + 2;
+        else if (step == T_PP)
+            length_of = LA + 3;
         else case (kind_of(step))
             K_DOT3:        length_of = SUM0 + 2 * LA + 1;
             K_DOT2, K_DET: length_of = SUM0 + LA + 1;
@@ -207,42 +225,55 @@ module ekf_core (
 
     // ---- register bank ---------------------------------------------------
     wire [32*NREG-1:0] bank;
-    wire [31:0] result [0:8];
-    // When the results of steps 6-9 leave the adders: O5 (datapaths 6, 7)
-    // at w = LA + 1 of step 1; O7 at w = SUM0 + LA and O6 (datapaths 0-2) at
-    // the end of step 9's wave; X+ (datapaths 0-2) at w = LA of step 10.
+    wire [31:0] result [0:NL-1];
+    // When results leave the adders other than at the end of their wave:
+    // O5 (datapaths 0, 1) at w = LA of step 1; O7's group 1 at w = SUM0 +
+    // LA (group 2 and O6 at the end of step 9's wave); X+ (datapaths 0-2)
+    // at w = LA of step 10; O8's group 1 at w = SUM0 + 2 LA; P+'s group 1
+    // at w = LA + 1.
     wire running  = busy && !waiting;
-    wire o5_ready = running && step == T_O1 && w == LA + 1;
+    wire o5_ready = running && step == T_O1 && w == LA;
     wire o7_ready = running && step == T_O7 && w == SUM0 + LA;
     wire xp_ready = running && step == T_O8 && w == LA;
+    wire o8_ready = running && step == T_O8 && w == SUM0 + 2 * LA;
+    wire pp_ready = running && step == T_PP && w == LA + 1;
     assign rd_data = (rd_addr < NREG) ? bank[32*rd_addr +: 32] : 32'd0;
 
+    // Only the inputs take the processor's writes (a write to a result's
+    // address is ignored), so a result register has one source and no
+    // multiplexer in front of it. A result is written in the cycle it
+    // leaves its unit: element e < NL of a step from datapath e, elements
+    // 6-8 of a 3x3 step (group 2) from datapath e - 3.
     genvar r;
     generate
         for (r = 0; r < NREG; r = r + 1) begin : regs
             reg [31:0] q;
             assign bank[32*r +: 32] = q;
-            // Only the inputs take the processor's writes (a write to a
-            // result's address is ignored), so a result register has one
-            // source and no multiplexer in front of it.
-            always @(posedge clk) begin
-                if (r < O1) begin
-                    if (!busy && wr_en && wr_addr == r)
-                        q <= wr_data;
-                end else if (owner_step(r) == T_O5) begin
-                    if (o5_ready)
-                        q <= result[6 + r - O5];
-                end else if (owner_step(r) == T_O7) begin
-                    if (o7_ready)
-                        q <= result[r - O7];
-                end else if (owner_step(r) == T_O6) begin
-                    if (busy && last && step == T_O7)
-                        q <= result[r - O6];
-                end else if (owner_step(r) == T_XP) begin
-                    if (xp_ready)
-                        q <= result[r - XP];
-                end else if (owner_step(r) >= 0 && busy && last && step == owner_step(r))
-                    q <= result[r - owner_base(r)];
+            if (r < O1) begin : input_reg
+                always @(posedge clk)
+                    if (!busy && wr_en && wr_addr == r) q <= wr_data;
+            end else if (owner_step(r) == T_O5) begin : o5_reg
+                always @(posedge clk) if (o5_ready) q <= result[r - O5];
+            end else if (owner_step(r) == T_O6) begin : o6_reg
+                always @(posedge clk)
+                    if (busy && last && step == T_O7) q <= result[r - O6];
+            end else if (owner_step(r) == T_XP) begin : xp_reg
+                always @(posedge clk) if (xp_ready) q <= result[r - XP];
+            end else if (owner_step(r) == T_O7 && r - O7 < NL) begin : o7_reg
+                always @(posedge clk) if (o7_ready) q <= result[r - O7];
+            end else if (owner_step(r) == T_O8 && r - O8 < NL) begin : o8_reg
+                always @(posedge clk) if (o8_ready) q <= result[r - O8];
+            end else if (owner_step(r) == T_PP && r - PP < NL) begin : pp_reg
+                always @(posedge clk) if (pp_ready) q <= result[r - PP];
+            end else if (owner_step(r) == T_O7 || owner_step(r) == T_O8 ||
+                         owner_step(r) == T_PP) begin : group2_reg
+                always @(posedge clk)
+                    if (busy && last && step == owner_step(r))
+                        q <= result[r - owner_base(r) - 3];
+            end else begin : result_reg
+                always @(posedge clk)
+                    if (busy && last && step == owner_step(r))
+                        q <= result[r - owner_base(r)];
             end
         end
     endgenerate
@@ -282,45 +313,49 @@ module ekf_core (
     // ---- datapaths -------------------------------------------------------
     genvar e;
     generate
-        for (e = 0; e < 9; e = e + 1) begin : lane
+        for (e = 0; e < NL; e = e + 1) begin : lane
             // Element (i, j) of a 3x2 / 2x2 result (2 columns), of a 3x3
-            // result (3 columns).
+            // result (3 columns); datapaths 3-5 also compute elements 6-8 of
+            // the 3x3 results (group 2: row 2, column J3).
             localparam integer I2 = e / 2, J2 = e % 2, I3 = e / 3, J3 = e % 3;
+            localparam GROUP2 = e >= 3;
             reg  [31:0] oa, ob;      // operands from the bank
             reg  [31:0] ra, rb;      // the same, registered: element-wise operands
             reg  [31:0] p0, p2;      // products caught from the multiplier
             wire [31:0] mul_y, add_y;
-            // The adder's operands. Datapaths 6 and 7 subtract O5 = z - h(X-)
-            // during step 1; datapaths 0-2 add X+ = X- + O6 at the start of
-            // step 10. In a dot product's wave the adder takes (p0 + p1) at
-            // SUM0, O6's (p0 + p1) at O6_SUM (step 9, datapaths 0-2; its
-            // first product is caught in p2) and (sum + p2) at SUM0 + LA.
-            // The selects are decoded a cycle ahead into registers of this
-            // datapath's own, so that no decode or wide fan-out stands
-            // before the adder.
+            // The adder's operands. Datapaths 0 and 1 subtract O5 = z - h(X-)
+            // at the start of step 1, datapaths 0-2 add X+ = X- + O6 at the
+            // start of step 10, both straight from the bank. In a dot
+            // product's wave the adder takes (p0 + p1) at SUM0 (and at
+            // G2 + LM + 1 for group 2 of step 10), O6's and group 2's
+            // (p0 + p1) of step 9 at O6_SUM (their first product caught in
+            // p2), and (sum + p2) otherwise. The selects are decoded a cycle
+            // ahead into registers of this datapath's own, so that no decode
+            // or wide fan-out stands before the adder.
             wire [2:0]  kind_n = kind_of(step_n);
-            wire        o5_n = (e == 6 || e == 7) && step_n == T_O1;
+            wire        o5_n = e < 2 && step_n == T_O1 && w_n == 6'd0;
             wire        xp_n = e < 3 && step_n == T_O8 && w_n == 6'd0;
-            (* keep *) reg sel_xp, sel_elem, sel_sum0, sel_o6, add_sub;
+            (* keep *) reg sel_o5, sel_xp, sel_elem, sel_sum0, sel_o6, add_sub;
             always @(posedge clk) begin
+                sel_o5   <= o5_n;
                 sel_xp   <= xp_n;
-                sel_elem <= kind_n == K_ADD || kind_n == K_SUB || o5_n;
-                sel_sum0 <= w_n == SUM0;
+                sel_elem <= kind_n == K_ADD || kind_n == K_SUB;
+                sel_sum0 <= w_n == SUM0 ||
+                            (GROUP2 && step_n == T_O8 && w_n == G2 + LM + 1);
                 sel_o6   <= w_n == O6_SUM;
-                add_sub  <= !xp_n && (kind_n == K_SUB || kind_n == K_DET || o5_n);
+                add_sub  <= o5_n || (!xp_n && (kind_n == K_SUB || kind_n == K_DET));
             end
-            wire [31:0] add_a = sel_xp ? `B(X + e) : sel_elem ? ra :
-                                sel_sum0 ? p0 : sel_o6 ? p2 : add_y;
-            wire [31:0] add_b = sel_xp ? `B(O6 + e) : sel_elem ? rb :
-                                (sel_sum0 || sel_o6) ? mul_y : p2;
+            wire [31:0] add_a = sel_o5 ? `B(Z + e % 2) : sel_xp ? `B(X + e % 3) :
+                                sel_elem ? ra : sel_sum0 ? p0 : sel_o6 ? p2 : add_y;
+            wire [31:0] add_b = sel_o5 ? `B(HX + e % 2) : sel_xp ? `B(O6 + e % 3) :
+                                sel_elem ? rb : (sel_sum0 || sel_o6) ? mul_y : p2;
 
+            // Group 2's product index in step 10.
+            wire [5:0]  w2 = w - G2;
+            wire [1:0]  k2 = w2[1:0];
             always @* begin
                 case (step)
-                    T_O1: if (e == 6 || e == 7) begin
-                              oa = `B(Z + e - 6);          ob = `B(HX + e - 6);
-                          end else begin
-                              oa = `SEL(P + 3 * I2, 1);    ob = `SEL(H + 3 * J2, 1);
-                          end
+                    T_O1: begin oa = `SEL(P + 3 * I2, 1);  ob = `SEL(H + 3 * J2, 1);  end
                     T_O2: begin oa = `SEL(H + 3 * I2, 1);  ob = `SEL(O1 + J2, 2);     end
                     T_O3: begin oa = `B(O2 + e % 4);       ob = `B(R + e % 4);        end
                     T_DET: begin
@@ -328,16 +363,30 @@ module ekf_core (
                         ob = (k == 2'd0) ? `B(O3 + 3) : `B(O3 + 2);
                     end
                     T_G:  begin oa = `SEL(O1 + 2 * I2, 1); ob = `SEL(O4 + J2, 2);     end
-                    // O6 = G O5's products enter datapaths 0-2 at w = 2, 3.
-                    T_O7: if (e < 3 && w == 2) begin
-                              oa = `B(G + 2 * e);          ob = `B(O5);
-                          end else if (e < 3 && w == 3) begin
-                              oa = `B(G + 2 * e + 1);      ob = `B(O5 + 1);
+                    // At w = 2, 3: O6 = G O5's products on datapaths 0-2,
+                    // group 2's (row 2 of G H) on datapaths 3-5.
+                    T_O7: if (w == 2 || w == 3) begin
+                              if (GROUP2) begin
+                                  oa = `B(G + 4 + w - 2);  ob = `B(H + J3 + 3 * (w - 2));
+                              end else begin
+                                  oa = `B(G + 2 * e + w - 2); ob = `B(O5 + w - 2);
+                              end
                           end else begin
                               oa = `SEL(G + 2 * I3, 1);    ob = `SEL(H + J3, 3);
                           end
-                    T_O8: begin oa = `SEL(O7 + 3 * I3, 1); ob = `SEL(P + J3, 3);      end
-                    default: begin oa = `B(P + e);         ob = `B(O8 + e);           end
+                    // From w = G2: group 2 (row 2 of O7 P) on datapaths 3-5.
+                    T_O8: if (GROUP2 && w >= G2) begin
+                              oa = (k2 == 2'd0) ? `B(O7 + 6) : (k2 == 2'd1) ? `B(O7 + 7) : `B(O7 + 8);
+                              ob = (k2 == 2'd0) ? `B(P + J3) : (k2 == 2'd1) ? `B(P + J3 + 3) : `B(P + J3 + 6);
+                          end else begin
+                              oa = `SEL(O7 + 3 * I3, 1);   ob = `SEL(P + J3, 3);
+                          end
+                    // At w = 1: group 2 on datapaths 3-5.
+                    default: if (GROUP2 && w == 1) begin
+                                 oa = `B(P + e + 3);       ob = `B(O8 + e + 3);
+                             end else begin
+                                 oa = `B(P + e);           ob = `B(O8 + e);
+                             end
                 endcase
             end
 
@@ -345,12 +394,13 @@ module ekf_core (
             fp_add add (.clk(clk), .a(add_a), .b(add_b), .sub(add_sub), .y(add_y));
 
             // Products leave the multiplier LM cycles after entering it; p1
-            // goes straight into the adder.
+            // goes straight into the adder. Group 2 of step 10 catches its
+            // p0 and p2 G2 cycles after group 1's, once group 1 has used them.
             always @(posedge clk) begin
                 ra <= oa;
                 rb <= ob;
-                if (w == LM) p0 <= mul_y;
-                if (w == LM + 2) p2 <= mul_y;
+                if (w == LM || (GROUP2 && step == T_O8 && w == G2 + LM)) p0 <= mul_y;
+                if (w == LM + 2 || (GROUP2 && step == T_O8 && w == G2 + LM + 2)) p2 <= mul_y;
             end
 
             // Step 4 writes O4's four entries only.

@@ -161,15 +161,19 @@ pub struct HwConfig {
     /// leaves the multiplier, so `mult2` takes no cycle of its own (the
     /// Verilog core; the papers' FSM has the state, `false`).
     pub forward: bool,
-    /// Steps 6-8 run on operators other steps' waves leave idle, with no
-    /// wave of their own (the Verilog core; `false` in the papers' strictly
-    /// sequential FSM): `O5 = z - h(X-)` beside step 1 (two adders step 1's
-    /// six elements leave idle); `O6 = G O5` inside step 9's wave (three
-    /// multipliers take its products after O7's, and its sums leave the
-    /// adders two cycles after O7's, so that wave's `multadd` is two cycles
-    /// longer); `X+ = X- + O6` beside step 10 (three adders, before step
-    /// 10's first sum). It needs nine datapaths (step 9 in one wave): with
-    /// fewer, the three steps keep their waves.
+    /// Steps run on operators other steps' waves leave idle (the Verilog
+    /// core; `false` in the papers' strictly sequential FSM). Steps 6-8
+    /// have no wave of their own: `O5 = z - h(X-)` on two adders before
+    /// step 1's first sum; `O6 = G O5` inside step 9's wave (three
+    /// multipliers take its products after O7's, its sums leave the adders
+    /// two cycles after O7's: that wave's `multadd` is two cycles longer);
+    /// `X+ = X- + O6` on three adders before step 10's first sum. With 6 to
+    /// 8 datapaths a 3x3 step (9, 10, 11) is still one wave: its row 2
+    /// (group 2) runs on datapaths 3-5, in step 9 beside O6 (no cost), in
+    /// step 10 from cycle `L_add + 1` on (its first sum one cycle after
+    /// group 1's last: `multadd` `L_add + 1` cycles longer), in step 11 one
+    /// cycle after group 1 (`add` one cycle longer). It needs at least six
+    /// datapaths: with fewer, every step keeps its waves.
     pub overlap: bool,
     /// Element-wise sums and differences take one cycle more: their
     /// operands pass a register before the adder (the Verilog core, whose
@@ -334,6 +338,9 @@ impl CoreRun {
 
 struct Machine {
     cfg: HwConfig,
+    /// Charge a step's elements as one wave, whatever the datapaths
+    /// ([`HwConfig::overlap`] with 6-8 datapaths).
+    one_wave: bool,
     cycle: u64,
     trace: Vec<Phase>,
     peak: OpCounts,
@@ -344,6 +351,7 @@ impl Machine {
     fn new(cfg: HwConfig) -> Self {
         let mut m = Self {
             cfg,
+            one_wave: false,
             cycle: 0,
             trace: Vec::new(),
             peak: OpCounts::default(),
@@ -374,10 +382,15 @@ impl Machine {
         states: &[(State, u64)],
         ops: OpCounts,
     ) {
-        let lanes = self.cfg.datapaths;
+        let lanes = if self.one_wave {
+            elements
+        } else {
+            self.cfg.datapaths
+        };
         let mut left = elements;
         while left > 0 {
-            let busy = left.min(lanes);
+            let issued = left.min(lanes);
+            let busy = issued.min(self.cfg.datapaths);
             for &(state, latency) in states {
                 self.visit(step, state, latency, busy);
             }
@@ -390,7 +403,7 @@ impl Machine {
             if ops.div > 0 {
                 self.peak.div = self.peak.div.max(busy);
             }
-            left -= busy;
+            left -= issued;
         }
         self.done.mul += ops.mul * elements;
         self.done.add += ops.add * elements;
@@ -576,9 +589,11 @@ pub fn run(cfg: &HwConfig, schedule: Schedule, inp: &CoreInputs) -> Result<CoreR
             let o3 = m.addsub("3 O3 = O2 + R", &o2, &inp.r, false);
             let o4 = m.inverse2("4 O4 = inv(O3)", &o3)?;
             let g = m.matmul("5 G = O1 O4", &o1, &o4);
-            if cfg.overlap && cfg.datapaths >= 9 {
+            if cfg.overlap && cfg.datapaths >= 6 {
                 // Steps 6-8 inside the waves of steps 1, 9 and 10 (the
-                // values as computed in the schedule's order).
+                // values as computed in the schedule's order); each 3x3
+                // step one wave, its row 2 a second group when it needs one.
+                let group2 = cfg.datapaths < 9;
                 let o5 = inp.z - inp.hx;
                 let o6 = product(&g, &o5);
                 let x = inp.x + o6;
@@ -587,10 +602,18 @@ pub fn run(cfg: &HwConfig, schedule: Schedule, inp: &CoreInputs) -> Result<CoreR
                     add: 2 + 3 + 3,
                     div: 0,
                 });
+                m.one_wave = true;
                 let o7 = m.matmul("9 O7 = G H, 7 O6 = G O5", &g, &inp.h);
                 m.extend_last(2);
                 let o8 = m.matmul("10 O8 = O7 P-, 8 X+ = X- + O6", &o7, &inp.p);
+                if group2 {
+                    m.extend_last(cfg.latencies.add + 1);
+                }
                 let p = m.addsub("11 P+ = P- - O8", &inp.p, &o8, true);
+                if group2 {
+                    m.extend_last(1);
+                }
+                m.one_wave = false;
                 m.finish(x, p, g)
             } else {
                 let o5 = m.addsub("6 O5 = z - h(X-)", &inp.z, &inp.hx, true);

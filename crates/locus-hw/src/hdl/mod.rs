@@ -67,6 +67,11 @@ impl HdlError {
     }
 }
 
+/// Datapaths of the Verilog core: six, one per element of a 3x2 result
+/// (the papers' core has nine); a 3x3 result's row 2 runs on datapaths 3-5
+/// in the same wave ([`HwConfig::overlap`]).
+pub const BUILT_DATAPATHS: usize = 6;
+
 /// Dividers of the Verilog core: one, pipelined, shared by step 4's four
 /// divisions (`hdl/core/ekf_core.v`; the papers' core has four).
 pub const BUILT_DIVIDERS: usize = 1;
@@ -75,7 +80,7 @@ pub const BUILT_DIVIDERS: usize = 1;
 /// latencies ([`built_latencies`]), its [`BUILT_DIVIDERS`] dividers, the
 /// second product forwarded into the adder, steps 6-8 on operators other
 /// steps leave idle and element-wise operands registered before the adder,
-/// on the papers' nine datapaths at their 50 MHz.
+/// on [`BUILT_DATAPATHS`] datapaths at the papers' 50 MHz.
 ///
 /// # Errors
 /// Those of [`built_latencies`].
@@ -86,6 +91,7 @@ pub fn built_config() -> Result<HwConfig, HdlError> {
         forward: true,
         overlap: true,
         elementwise_register: true,
+        datapaths: BUILT_DATAPATHS,
         ..HwConfig::default()
     })
 }
