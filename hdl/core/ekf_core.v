@@ -365,12 +365,12 @@ module ekf_core (
                     T_G:  begin oa = `SEL(O1 + 2 * I2, 1); ob = `SEL(O4 + J2, 2);     end
                     // At w = 2, 3: O6 = G O5's products on datapaths 0-2,
                     // group 2's (row 2 of G H) on datapaths 3-5.
-                    T_O7: if (w == 2 || w == 3) begin
-                              if (GROUP2) begin
-                                  oa = `B(G + 4 + w - 2);  ob = `B(H + J3 + 3 * (w - 2));
-                              end else begin
-                                  oa = `B(G + 2 * e + w - 2); ob = `B(O5 + w - 2);
-                              end
+                    T_O7: if (w == 2) begin
+                              if (GROUP2) begin oa = `B(G + 4);     ob = `B(H + J3);     end
+                              else        begin oa = `B(G + 2 * e); ob = `B(O5);         end
+                          end else if (w == 3) begin
+                              if (GROUP2) begin oa = `B(G + 5);     ob = `B(H + J3 + 3); end
+                              else        begin oa = `B(G + 2 * e + 1); ob = `B(O5 + 1); end
                           end else begin
                               oa = `SEL(G + 2 * I3, 1);    ob = `SEL(H + J3, 3);
                           end
