@@ -70,43 +70,31 @@ module fp_mul (
     reg        [47:0] r1_p;        // product of the significands
     reg        [6:0]  r1_r;        // p's shift: right by r1_r from {p, 24'b0}
     reg               r1_low;      // lz < e: one bit lower if p[47 - lz] = 0
-    reg        [7:0]  r1_ea;       // exponent field when T = 47 - sl
-    reg        [7:0]  r1_eb;       // ... when T = 46 - sl
-    reg               r1_ova;      // the exponent overflows when T = 47 - sl
-    reg               r1_ovb;      // ... when T = 46 - sl
-    reg               r1_sta;      // sticky bit when T = 47 - sl
-    reg               r1_stb;      // ... when T = 46 - sl
+    reg        [8:0]  r1_sum;      // ea + eb (e = sum - 127)
+    reg        [4:0]  r1_lz;       // the subnormal operand's leading zeros
+    reg        [5:0]  r1_tz;       // p's trailing zeros
 
-    // Everything below is derived from the sums of the operands' exponents,
-    // leading zeros and trailing zeros with each comparison taken against a
-    // constant folded into the other side, so that no carry chain waits for
-    // more than one other: e = sum - 127, and "e <= lz" is sum <= lz + 127.
+    // e = sum - 127. Only a subnormal significand has leading zeros, and
+    // with two subnormal operands e = -125 is below any lz, so lz is the OR
+    // of the two counts wherever it is used. "e <= lz" is then sum <= 127,
+    // or sum - 127 (found beside the count) <= lz: one carry chain after
+    // the count.
     wire [8:0] s1_sum = {1'b0, ea} + {1'b0, eb};
-    wire [5:0] s1_lz  = {1'b0, fp_lzc24(ma)} + {1'b0, fp_lzc24(mb)};
-    wire [5:0] s1_tz  = {1'b0, fp_tzc24(ma)} + {1'b0, fp_tzc24(mb)};
+    wire [8:0] s1_e1  = s1_sum - 9'd127;
+    wire [4:0] s1_lz  = fp_lzc24(ma) | fp_lzc24(mb);
     // sl = e (e <= lz: down to exponent 1 at most) or lz.
-    wire       s1_le  = {1'b0, s1_sum} <= {4'd0, s1_lz} + 10'd127;
+    wire       s1_le  = s1_sum <= 9'd127 || s1_e1 <= {4'd0, s1_lz};
     always @(posedge clk) begin
         r1_s   <= a[31] ^ b[31];
         r1_p   <= ma * mb;
         // r = 24 - sl: 151 - sum when sl = e (saturated at 127: sum < 24
         // shifts every bit out), else 24 - lz.
         r1_r   <= s1_le ? ((s1_sum < 9'd24) ? 7'd127 : 7'd23 - s1_sum[6:0])
-                        : 7'd24 - {1'b0, s1_lz};
+                        : 7'd24 - {2'd0, s1_lz};
         r1_low <= !s1_le;
-        // The exponent fields e + 1 - lz and e - lz when sl = lz (sum - lz -
-        // 126 and - 127); 1 and 0 when sl = e, where the leading one can be
-        // at bit 47 - sl only at exponent 1.
-        r1_ea  <= s1_le ? 8'd1 : s1_sum[7:0] - {2'd0, s1_lz} - 8'd126;
-        r1_eb  <= s1_le ? 8'd0 : s1_sum[7:0] - {2'd0, s1_lz} - 8'd127;
-        r1_ova <= !s1_le && {1'b0, s1_sum} >= {4'd0, s1_lz} + 10'd381;
-        r1_ovb <= !s1_le && {1'b0, s1_sum} >= {4'd0, s1_lz} + 10'd382;
-        // Sticky: p's trailing zeros tz against T - 26 (tz + sl <= 21, or
-        // <= 20 one bit lower).
-        r1_sta <= s1_le ? {1'b0, s1_sum} + {4'd0, s1_tz} <= 10'd148
-                        : {1'b0, s1_tz} + {1'b0, s1_lz} <= 7'd21;
-        r1_stb <= s1_le ? {1'b0, s1_sum} + {4'd0, s1_tz} <= 10'd147
-                        : {1'b0, s1_tz} + {1'b0, s1_lz} <= 7'd20;
+        r1_sum <= s1_sum;
+        r1_lz  <= s1_lz;
+        r1_tz  <= {1'b0, fp_tzc24(ma)} + {1'b0, fp_tzc24(mb)};
 
         r1_special <= 1'b1;
         if (a_nan || b_nan || (a_inf && b_zero) || (a_zero && b_inf))
@@ -130,20 +118,33 @@ module fp_mul (
     reg        [7:0]  s2_ef;
     reg               s2_inc;
     reg        [30:0] s2_mag;
+    // Beside the shift, from the registered sums: the exponent fields
+    // e + 1 - lz and e - lz when sl = lz (sum - lz - 126 and - 127; 1 and 0
+    // when sl = e, where the leading one can be at bit 47 - sl only at
+    // exponent 1), their overflow, and the sticky bit, p's trailing zeros
+    // against T - 26 (tz + sl <= 21, or <= 20 one bit lower).
+    wire [7:0] s2_ea  = r1_low ? r1_sum[7:0] - {3'd0, r1_lz} - 8'd126 : 8'd1;
+    wire [7:0] s2_eb  = r1_low ? r1_sum[7:0] - {3'd0, r1_lz} - 8'd127 : 8'd0;
+    wire       s2_ova = r1_low && {1'b0, r1_sum} >= {5'd0, r1_lz} + 10'd381;
+    wire       s2_ovb = r1_low && {1'b0, r1_sum} >= {5'd0, r1_lz} + 10'd382;
+    wire       s2_sta = r1_low ? {1'b0, r1_tz} + {2'd0, r1_lz} <= 7'd21
+                               : {1'b0, r1_sum} + {4'd0, r1_tz} <= 10'd148;
+    wire       s2_stb = r1_low ? {1'b0, r1_tz} + {2'd0, r1_lz} <= 7'd20
+                               : {1'b0, r1_sum} + {4'd0, r1_tz} <= 10'd147;
     always @(posedge clk) begin
         s2_q = {r1_p, 24'd0} >> r1_r;
         s2_b = !s2_q[47] && r1_low;
-        s2_m = s2_b ? {s2_q[46:21], r1_stb} : {s2_q[47:22], r1_sta};
+        s2_m = s2_b ? {s2_q[46:21], s2_stb} : {s2_q[47:22], s2_sta};
         // The exponent field: 0 for a subnormal (no leading one at bit 47
         // and none one lower to take).
-        s2_ef = s2_q[47] ? r1_ea : (r1_low ? r1_eb : 8'd0);
+        s2_ef = s2_q[47] ? s2_ea : (r1_low ? s2_eb : 8'd0);
         s2_inc = s2_m[2] & (s2_m[3] | s2_m[1] | s2_m[0]);
         // A carry out of the fraction moves a subnormal to the smallest
         // normal, and the largest finite to infinity.
         s2_mag = {s2_ef, s2_m[25:3]} + {30'd0, s2_inc};
         if (r1_special)
             r2_y <= r1_spec_y;
-        else if (s2_b ? r1_ovb : r1_ova)
+        else if (s2_b ? s2_ovb : s2_ova)
             r2_y <= {r1_s, 8'hFF, 23'd0};
         else
             r2_y <= {r1_s, s2_mag};
