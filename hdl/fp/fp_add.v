@@ -45,10 +45,10 @@ module fp_add (
     // Each operand's exponent (a subnormal's is 1), significand (hidden bit
     // included) and trailing zeros, found beside the ordering compare; the
     // exponent difference both ways, so that the compare only chooses.
-    wire [7:0]  ea = (a[30:23] == 8'd0) ? 8'd1 : a[30:23];
-    wire [7:0]  eb = (b[30:23] == 8'd0) ? 8'd1 : b[30:23];
-    wire [23:0] ma = {a[30:23] != 8'd0, a[22:0]};
-    wire [23:0] mb = {b[30:23] != 8'd0, b[22:0]};
+    wire [7:0]  ea = fp_exp1(a);
+    wire [7:0]  eb = fp_exp1(b);
+    wire [23:0] ma = fp_sig24(a);
+    wire [23:0] mb = fp_sig24(b);
     wire [4:0]  tza = fp_tzc24(ma);
     wire [4:0]  tzb = fp_tzc24(mb);
     wire [7:0]  dab = ea - eb;

@@ -3,14 +3,30 @@
 // Included inside each module body (Verilog-2005 functions belong to a
 // module), so this file has no include guard.
 //
-// Internal number format: a signed 12-bit biased exponent e and a
-// significand m whose leading one sits at a fixed bit, value
-// m / 2^(top bit) * 2^(e - 127). Subnormal inputs are normalised on unpack
-// (their e goes below 1); results with e below 1 are shifted back into the
-// subnormal range by fp_round_pack (gradual underflow).
+// The adder and the multiplier take a word as encoded (fp_exp1, fp_sig24:
+// a subnormal is its fraction at exponent 1). The divider unpacks into an
+// internal format: a signed 12-bit biased exponent e and a significand m
+// whose leading one sits at a fixed bit, value m / 2^(top bit) *
+// 2^(e - 127). Subnormal inputs are normalised on unpack (their e goes
+// below 1); results with e below 1 are shifted back into the subnormal
+// range by fp_round_pack (gradual underflow).
 
 // Canonical quiet NaN: every NaN result of the units is this word.
 localparam [31:0] FP_QNAN = 32'h7FC0_0000;
+
+// The biased exponent of a finite word as encoded, a subnormal's (and a
+// zero's) taken as 1.
+function [7:0] fp_exp1;
+    input [31:0] x;
+    fp_exp1 = (x[30:23] == 8'd0) ? 8'd1 : x[30:23];
+endfunction
+
+// The significand of a finite word as encoded: the fraction with its
+// hidden bit, 0 for a subnormal.
+function [23:0] fp_sig24;
+    input [31:0] x;
+    fp_sig24 = {x[30:23] != 8'd0, x[22:0]};
+endfunction
 
 // Leading zeros of a 24-bit vector (24 for zero), by binary search
 // (halving steps rather than a priority chain).

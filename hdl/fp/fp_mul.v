@@ -52,10 +52,10 @@ module fp_mul (
     wire b_zero = (b[30:0] == 31'd0);
 
     // Exponents (a subnormal's is 1) and significands as encoded.
-    wire [7:0]  ea = (a[30:23] == 8'd0) ? 8'd1 : a[30:23];
-    wire [7:0]  eb = (b[30:23] == 8'd0) ? 8'd1 : b[30:23];
-    wire [23:0] ma = {a[30:23] != 8'd0, a[22:0]};
-    wire [23:0] mb = {b[30:23] != 8'd0, b[22:0]};
+    wire [7:0]  ea = fp_exp1(a);
+    wire [7:0]  eb = fp_exp1(b);
+    wire [23:0] ma = fp_sig24(a);
+    wire [23:0] mb = fp_sig24(b);
 
     // ---- stage 1 ----
     // The result's 27 bits m (m[26] its leading one, or 0 for a subnormal;
